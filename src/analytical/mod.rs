@@ -1,0 +1,1 @@
+//! Closed-form reference solutions, one file per source.

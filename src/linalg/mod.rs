@@ -1,0 +1,107 @@
+//! Sparse linear algebra: the compressed sparse row pattern built once per topology, and the
+//! linear solvers behind one trait ([`LinearSolver`]): faer sparse LU, faer sparse Cholesky
+//! (LLᵀ / LDLᵀ), and preconditioned conjugate gradients.
+//!
+//! Every solver splits its work into `analyze` (symbolic: ordering, elimination tree, memory;
+//! called once per sparsity pattern) and `factor` + `solve` (numeric; called every time the
+//! values change). Parallelism is passed in as a thread count, never chosen here.
+
+pub mod csr;
+pub mod direct;
+pub mod pcg;
+
+pub use csr::CsrMatrix;
+
+use thiserror::Error;
+
+/// Which linear solver to use. Chosen in the case file (`[solver] linear = ...`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LinearSolverKind {
+    /// faer sparse LU with partial pivoting (any matrix).
+    Lu,
+    /// faer sparse Cholesky (symmetric; LLᵀ, falling back to LDLᵀ with Bunch–Kaufman pivoting
+    /// when the matrix is not positive definite).
+    Cholesky,
+    /// Preconditioned conjugate gradients (symmetric positive definite matrices).
+    Pcg,
+}
+
+/// Preconditioner for [`LinearSolverKind::Pcg`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preconditioner {
+    /// Diagonal scaling.
+    Jacobi,
+    /// Incomplete Cholesky with zero fill, IC(0), on the matrix pattern.
+    Ic0,
+}
+
+#[derive(Debug, Error)]
+pub enum LinalgError {
+    #[error("matrix is singular or not factorizable ({0})")]
+    Singular(String),
+    #[error("PCG did not converge: relative residual {residual:.3e} after {iterations} iterations (tolerance {tol:.1e})")]
+    NotConverged { iterations: usize, residual: f64, tol: f64 },
+    #[error("solver used before `analyze` was called for this pattern")]
+    NotAnalyzed,
+    #[error("linear algebra: {0}")]
+    Other(String),
+}
+
+/// Options for building a solver.
+#[derive(Clone, Copy, Debug)]
+pub struct SolverOptions {
+    pub kind: LinearSolverKind,
+    pub preconditioner: Preconditioner,
+    /// Relative residual tolerance of PCG, ‖b − Ax‖ / ‖b‖.
+    pub pcg_tol: f64,
+    pub pcg_max_iterations: usize,
+    /// Threads for the numeric factorisation (1 = sequential).
+    pub threads: usize,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        Self {
+            kind: LinearSolverKind::Lu,
+            preconditioner: Preconditioner::Ic0,
+            pcg_tol: 1e-10,
+            pcg_max_iterations: 10_000,
+            threads: 1,
+        }
+    }
+}
+
+/// A sparse linear solver for `A x = b` with `A` square in CSR form.
+///
+/// Lifecycle: `analyze(&a)` once per sparsity pattern → (`factor(&a)` → `solve(&b, &mut x)`)*
+/// for every new set of values with the same pattern. `analyze` must be called again when the
+/// pattern changes (the caller tracks that; see `CsrMatrix::pattern_id`).
+pub trait LinearSolver: Send {
+    fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError>;
+    fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError>;
+    /// Solve with the last factorisation. For PCG `x` is the initial guess on entry.
+    fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError>;
+    fn name(&self) -> &'static str;
+}
+
+/// What a solve reports (iterations are 1 for direct solvers).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SolveStats {
+    pub iterations: usize,
+    pub relative_residual: f64,
+}
+
+/// Build the solver chosen in the options.
+pub fn make_solver(opts: &SolverOptions) -> Box<dyn LinearSolver> {
+    match opts.kind {
+        LinearSolverKind::Lu => Box::new(direct::FaerLu::new(opts.threads)),
+        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(opts.threads)),
+        LinearSolverKind::Pcg => Box::new(pcg::Pcg::new(
+            opts.preconditioner,
+            opts.pcg_tol,
+            opts.pcg_max_iterations,
+        )),
+    }
+}

@@ -1,0 +1,1 @@
+//! Logarithmic strain tools. (stub: being written)

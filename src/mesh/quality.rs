@@ -1,0 +1,1 @@
+//! Mesh quality measures. (stub: being written)

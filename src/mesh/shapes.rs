@@ -1,0 +1,1 @@
+//! Mesh generators. (stub: being written)
