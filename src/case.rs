@@ -1,1 +1,2059 @@
-//! (being written)
+//! The TOML case file: schema (serde), validation and the validated [`Case`].
+//!
+//! The schema is documented key by key in `docs/case-file.md`; the built-in default job
+//! ([`DEFAULT_JOB`], `jobs/default.toml`) is a complete, commented example.
+//!
+//! Parsing happens in two stages:
+//! 1. the text is deserialised into private raw structs (module `raw`) that mirror the file
+//!    one-to-one and reject unknown keys and wrong types (`#[serde(deny_unknown_fields)]`);
+//!    syntax and type errors are reported with the key path, line and column;
+//! 2. the raw structs are validated (ranges, finiteness, required keys, cross references,
+//!    duplicated names, files) and converted into the public types below, applying the
+//!    documented defaults.
+//!
+//! Every failure is one [`CaseError`]: the dotted key path (`materials[1].poisson_ratio`) and a
+//! message that states the offending value and what was expected. Nothing here panics on any
+//! input and nothing is printed.
+
+use std::collections::{HashMap, HashSet};
+use std::fmt::Write as _;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+use crate::linalg::{LinearSolverKind, Preconditioner};
+use crate::material::creep::CreepParams;
+use crate::material::{ConstitutiveLaw, Creep, Elastic, HardeningTable, J2Plastic, Material};
+
+/// The built-in default job (plane-strain upsetting of an aluminium block).
+pub const DEFAULT_JOB: &str = include_str!("../jobs/default.toml");
+
+/// Largest accepted `divisions` entry (a guard against absurd meshes).
+pub const MAX_DIVISIONS: i64 = 100_000;
+
+/// Default density, t/mm³.
+pub const DEFAULT_DENSITY: f64 = 1e-9;
+
+/// The paper's Table 2 creep parameters of asphalt (the stress unit of `a` is not stated
+/// there; the case file must say it, see `stress_unit`). `stress_scale` is a placeholder 1.
+pub const ASPHALT_TABLE2: CreepParams = CreepParams {
+    a: 5.15e-8,
+    n: 0.826,
+    m: 0.0,
+    p: 0.0,
+    q: 0.22,
+    temperature: 1.0,
+    stress_scale: 1.0,
+};
+
+// ---------------------------------------------------------------------------------------------
+// Error
+// ---------------------------------------------------------------------------------------------
+
+/// A case-file error: the dotted key path and a message naming the value and the expectation.
+///
+/// `Display` prints `KEY: MESSAGE` (or just `MESSAGE` when the error is not tied to a key).
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{}", self.render())]
+pub struct CaseError {
+    /// Dotted key path, e.g. `materials[1].poisson_ratio`; a file path for I/O errors; may be
+    /// empty for syntax errors that are not inside any key.
+    pub key: String,
+    pub message: String,
+}
+
+impl CaseError {
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+
+    fn render(&self) -> String {
+        if self.key.is_empty() {
+            self.message.clone()
+        } else {
+            format!("{}: {}", self.key, self.message)
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validated types
+// ---------------------------------------------------------------------------------------------
+
+/// A validated case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    pub title: String,
+    pub formulation: Formulation,
+    pub materials: Vec<MaterialSpec>,
+    pub bodies: Vec<BodySpec>,
+    pub boundary: Vec<DirichletSpec>,
+    pub loads: Vec<LoadSpec>,
+    pub time: TimeSpec,
+    pub solver: SolverSpec,
+    pub output: OutputSpec,
+    /// Directory of the case file; relative paths in the file are resolved against it.
+    pub base_dir: PathBuf,
+}
+
+/// Which incremental formulation the element uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Formulation {
+    /// Total Lagrangian (reference configuration), paper eq. 5–11.
+    TotalLagrangian,
+    /// Updated Lagrangian (current configuration), paper eq. 12–17.
+    #[default]
+    UpdatedLagrangian,
+}
+
+/// A named material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialSpec {
+    pub name: String,
+    /// t/mm³.
+    pub density: f64,
+    pub material: Material,
+}
+
+/// A body: one shape meshed with one material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodySpec {
+    pub name: String,
+    /// Index into [`Case::materials`].
+    pub material: usize,
+    pub shape: ShapeSpec,
+    /// Target element edge length h (mm).
+    pub mesh_size: f64,
+    /// Structured divisions `[n along x or radius, n along y or circumference]` (rectangle,
+    /// cook, annulus sector only); overrides `mesh_size` there.
+    pub divisions: Option<[usize; 2]>,
+}
+
+/// Geometry of a body (mm, degrees).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ShapeSpec {
+    Rectangle {
+        origin: [f64; 2],
+        size: [f64; 2],
+    },
+    Disc {
+        center: [f64; 2],
+        radius: f64,
+    },
+    Ellipse {
+        center: [f64; 2],
+        semi_axes: [f64; 2],
+        angle_deg: f64,
+    },
+    Polygon {
+        vertices: Vec<[f64; 2]>,
+    },
+    /// The standard Cook membrane: trapezoid (0,0), (48,44), (48,60), (0,44).
+    Cook,
+    AnnulusSector {
+        center: [f64; 2],
+        inner_radius: f64,
+        outer_radius: f64,
+        angles_deg: [f64; 2],
+    },
+}
+
+impl ShapeSpec {
+    /// The lower-case name used in the case file (`type = ...`).
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            ShapeSpec::Rectangle { .. } => "rectangle",
+            ShapeSpec::Disc { .. } => "disc",
+            ShapeSpec::Ellipse { .. } => "ellipse",
+            ShapeSpec::Polygon { .. } => "polygon",
+            ShapeSpec::Cook => "cook",
+            ShapeSpec::AnnulusSector { .. } => "annulus_sector",
+        }
+    }
+
+    /// Names of the edge sets the mesher provides for this shape.
+    pub fn edge_set_names(&self) -> Vec<String> {
+        let names: &[&str] = match self {
+            ShapeSpec::Rectangle { .. } | ShapeSpec::Cook => {
+                &["left", "right", "bottom", "top", "boundary"]
+            }
+            ShapeSpec::Disc { .. } | ShapeSpec::Ellipse { .. } => &["outer", "boundary"],
+            ShapeSpec::AnnulusSector { .. } => &["inner", "outer", "start", "end", "boundary"],
+            ShapeSpec::Polygon { vertices } => {
+                let mut v = vec!["boundary".to_string()];
+                v.extend((0..vertices.len()).map(|i| format!("side{i}")));
+                return v;
+            }
+        };
+        names.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// Centre for radial displacements (disc, ellipse, annulus sector); `None` otherwise.
+    pub fn center(&self) -> Option<[f64; 2]> {
+        match self {
+            ShapeSpec::Disc { center, .. }
+            | ShapeSpec::Ellipse { center, .. }
+            | ShapeSpec::AnnulusSector { center, .. } => Some(*center),
+            _ => None,
+        }
+    }
+}
+
+/// Time variation of a prescribed value: the value is multiplied by `at(t, t_end)`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Amplitude {
+    /// 0 at t = 0, 1 at t = t_end, linear in between (held at 1 after t_end).
+    #[default]
+    Ramp,
+    /// 1 at all times.
+    Constant,
+    /// Piecewise linear through `[t, f]` points (times strictly increasing), constant outside.
+    Table(Vec<[f64; 2]>),
+}
+
+impl Amplitude {
+    /// Amplitude factor at time `t` of an analysis that ends at `t_end`.
+    pub fn at(&self, t: f64, t_end: f64) -> f64 {
+        match self {
+            Amplitude::Ramp => {
+                if t_end > 0.0 {
+                    (t / t_end).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                }
+            }
+            Amplitude::Constant => 1.0,
+            Amplitude::Table(pts) => {
+                let (Some(first), Some(last)) = (pts.first(), pts.last()) else {
+                    return 0.0;
+                };
+                if t <= first[0] {
+                    return first[1];
+                }
+                if t >= last[0] {
+                    return last[1];
+                }
+                for w in pts.windows(2) {
+                    let (a, b) = (w[0], w[1]);
+                    if t <= b[0] {
+                        let dt = b[0] - a[0];
+                        if dt <= 0.0 {
+                            return b[1];
+                        }
+                        return a[1] + (b[1] - a[1]) * (t - a[0]) / dt;
+                    }
+                }
+                last[1]
+            }
+        }
+    }
+}
+
+/// Prescribed displacements on an edge set (mm, times the amplitude).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DirichletSpec {
+    /// Index into [`Case::bodies`].
+    pub body: usize,
+    pub set: String,
+    pub ux: Option<f64>,
+    pub uy: Option<f64>,
+    /// Radial displacement about the shape's [`ShapeSpec::center`].
+    pub radial: Option<f64>,
+    pub amplitude: Amplitude,
+}
+
+/// Kind and value of a load on an edge set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LoadKind {
+    /// Dead traction per reference length `[tx, ty]`, MPa.
+    Traction([f64; 2]),
+    /// Follower pressure normal to the current edge, MPa (positive pushes into the body).
+    Pressure(f64),
+    /// Total force `[Fx, Fy]` (N per unit thickness) spread uniformly over the set's
+    /// reference length.
+    Force([f64; 2]),
+}
+
+/// A load on an edge set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadSpec {
+    /// Index into [`Case::bodies`].
+    pub body: usize,
+    pub set: String,
+    pub kind: LoadKind,
+    pub amplitude: Amplitude,
+}
+
+/// Time stepping (s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeSpec {
+    pub end: f64,
+    pub dt: f64,
+    pub dt_min: f64,
+    pub dt_max: f64,
+    pub growth: f64,
+    pub cutback: f64,
+    pub easy_iterations: usize,
+    pub max_steps: usize,
+}
+
+impl TimeSpec {
+    /// End time and initial step with every other field at its documented default.
+    pub fn new(end: f64, dt: f64) -> Self {
+        Self {
+            end,
+            dt,
+            dt_min: (end * 1e-6).min(dt),
+            dt_max: end,
+            growth: 1.5,
+            cutback: 0.5,
+            easy_iterations: 6,
+            max_steps: 100_000,
+        }
+    }
+}
+
+impl Default for TimeSpec {
+    /// `end = 1`, `dt = 0.1`, the rest as documented.
+    fn default() -> Self {
+        Self::new(1.0, 0.1)
+    }
+}
+
+/// Newton variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NewtonKind {
+    /// Tangent re-formed every iteration.
+    #[default]
+    Full,
+    /// Tangent formed once per step (eq. 9/16 of the paper).
+    Modified,
+}
+
+/// Linear solver choice; `Auto` is resolved by [`Case::auto_linear_kind`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LinearChoice {
+    #[default]
+    Auto,
+    Fixed(LinearSolverKind),
+}
+
+/// Nonlinear and linear solver settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSpec {
+    pub newton: NewtonKind,
+    pub max_iterations: usize,
+    pub residual_tol: f64,
+    pub energy_tol: f64,
+    pub line_search: bool,
+    pub linear: LinearChoice,
+    pub preconditioner: Preconditioner,
+    pub pcg_tol: f64,
+    pub pcg_max_iterations: usize,
+    /// 0 = all cores.
+    pub threads: usize,
+    /// Augmented-Lagrangian penalty for ν = 0.5, in units of the shear modulus.
+    pub incompressible_penalty: f64,
+    pub volume_tol: f64,
+    pub max_volume_updates: usize,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            newton: NewtonKind::Full,
+            max_iterations: 25,
+            residual_tol: 1e-8,
+            energy_tol: 1e-16,
+            line_search: true,
+            linear: LinearChoice::Auto,
+            preconditioner: Preconditioner::Ic0,
+            pcg_tol: 1e-10,
+            pcg_max_iterations: 10_000,
+            threads: 0,
+            incompressible_penalty: 1000.0,
+            volume_tol: 1e-10,
+            max_volume_updates: 30,
+        }
+    }
+}
+
+/// Extra columns of `history.csv`: `(body index, edge set name)`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct OutputSpec {
+    /// Reaction force columns `rx_BODY_SET`, `ry_BODY_SET`.
+    pub reactions: Vec<(usize, String)>,
+    /// Mean displacement columns `ux_BODY_SET`, `uy_BODY_SET`.
+    pub displacements: Vec<(usize, String)>,
+}
+
+impl Case {
+    /// The linear solver `linear = "auto"` stands for: Cholesky when every material used by a
+    /// body has a symmetric tangent and no load is a follower pressure, LU otherwise.
+    pub fn auto_linear_kind(&self) -> LinearSolverKind {
+        let symmetric = self
+            .bodies
+            .iter()
+            .filter_map(|b| self.materials.get(b.material))
+            .all(|m| m.material.symmetric_tangent());
+        let follower = self
+            .loads
+            .iter()
+            .any(|l| matches!(l.kind, LoadKind::Pressure(_)));
+        if symmetric && !follower {
+            LinearSolverKind::Cholesky
+        } else {
+            LinearSolverKind::Lu
+        }
+    }
+
+    /// The linear solver to use (resolving `Auto`).
+    pub fn linear_kind(&self) -> LinearSolverKind {
+        match self.solver.linear {
+            LinearChoice::Auto => self.auto_linear_kind(),
+            LinearChoice::Fixed(k) => k,
+        }
+    }
+
+    /// Index of the body called `name`.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Index of the material called `name`.
+    pub fn material_index(&self, name: &str) -> Option<usize> {
+        self.materials.iter().position(|m| m.name == name)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Entry points
+// ---------------------------------------------------------------------------------------------
+
+/// Read and validate the case file at `path` (relative paths inside are resolved against the
+/// file's directory).
+pub fn load(path: &Path) -> Result<Case, CaseError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        CaseError::new(
+            "",
+            format!("cannot read case file \"{}\": {e}", path.display()),
+        )
+    })?;
+    let base_dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    parse(&text, &base_dir)
+}
+
+/// Parse and validate case-file text; `base_dir` resolves relative paths (hardening files).
+pub fn parse(text: &str, base_dir: &Path) -> Result<Case, CaseError> {
+    let root = toml::de::DeTable::parse(text).map_err(|e| toml_error(text, None, &e))?;
+    let loc = Locator::new(text, root.get_ref());
+    let raw: raw::Case = toml::from_str(text).map_err(|e| toml_error(text, Some(&loc), &e))?;
+    let cx = Cx {
+        loc: &loc,
+        base_dir,
+    };
+    cx.case(raw)
+}
+
+/// The built-in default job ([`DEFAULT_JOB`]); its validity is checked by a test.
+pub fn default_case() -> Case {
+    match parse(DEFAULT_JOB, Path::new(".")) {
+        Ok(c) => c,
+        Err(e) => panic!("the built-in default job is invalid: {e}"),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Raw serde structs (one-to-one with the file)
+// ---------------------------------------------------------------------------------------------
+
+mod raw {
+    use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
+    use serde::Deserialize;
+    use std::marker::PhantomData;
+
+    /// Exactly two values `[a, b]` (serde's `[T; 2]` would silently ignore extra elements).
+    #[derive(Clone, Copy)]
+    pub struct Pair<T>(pub [T; 2]);
+
+    impl<'de, T: Deserialize<'de>> Deserialize<'de> for Pair<T> {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V<T>(PhantomData<T>);
+            impl<'de, T: Deserialize<'de>> Visitor<'de> for V<T> {
+                type Value = Pair<T>;
+                fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                    f.write_str("an array of exactly two numbers")
+                }
+                fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Pair<T>, A::Error> {
+                    let a: T = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(0, &self))?;
+                    let b: T = seq
+                        .next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(1, &self))?;
+                    let mut n = 2;
+                    while seq.next_element::<IgnoredAny>()?.is_some() {
+                        n += 1;
+                    }
+                    if n != 2 {
+                        return Err(de::Error::invalid_length(n, &self));
+                    }
+                    Ok(Pair([a, b]))
+                }
+            }
+            d.deserialize_seq(V(PhantomData))
+        }
+    }
+
+    pub type P2 = Pair<f64>;
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Case {
+        pub title: Option<String>,
+        pub model: Option<Model>,
+        pub materials: Option<Vec<Material>>,
+        pub bodies: Option<Vec<Body>>,
+        pub boundary: Option<Vec<Boundary>>,
+        pub loads: Option<Vec<Load>>,
+        pub time: Option<Time>,
+        pub solver: Option<Solver>,
+        pub output: Option<Output>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Model {
+        pub formulation: Option<String>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Material {
+        pub name: Option<String>,
+        pub model: Option<String>,
+        pub youngs_modulus: Option<f64>,
+        pub poisson_ratio: Option<f64>,
+        pub density: Option<f64>,
+        pub yield_stress: Option<f64>,
+        pub hardening: Option<Hardening>,
+        pub creep: Option<Creep>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Hardening {
+        pub strain: Option<String>,
+        pub points: Option<Vec<P2>>,
+        pub file: Option<String>,
+        pub preset: Option<String>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Creep {
+        #[serde(rename = "A", alias = "a")]
+        pub a: Option<f64>,
+        pub n: Option<f64>,
+        pub m: Option<f64>,
+        pub p: Option<f64>,
+        pub q: Option<f64>,
+        pub temperature: Option<f64>,
+        pub stress_unit: Option<String>,
+        pub preset: Option<String>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Body {
+        pub name: Option<String>,
+        pub material: Option<String>,
+        pub mesh_size: Option<f64>,
+        pub divisions: Option<Pair<i64>>,
+        pub shape: Option<Shape>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Shape {
+        #[serde(rename = "type")]
+        pub kind: Option<String>,
+        pub origin: Option<P2>,
+        pub size: Option<P2>,
+        pub center: Option<P2>,
+        pub radius: Option<f64>,
+        pub semi_axes: Option<P2>,
+        pub angle: Option<f64>,
+        pub vertices: Option<Vec<P2>>,
+        pub inner_radius: Option<f64>,
+        pub outer_radius: Option<f64>,
+        pub angles: Option<P2>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Boundary {
+        pub body: Option<String>,
+        pub set: Option<String>,
+        pub ux: Option<f64>,
+        pub uy: Option<f64>,
+        pub radial: Option<f64>,
+        pub amplitude: Option<toml::Value>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Load {
+        pub body: Option<String>,
+        pub set: Option<String>,
+        #[serde(rename = "type")]
+        pub kind: Option<String>,
+        pub value: Option<toml::Value>,
+        pub amplitude: Option<toml::Value>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Time {
+        pub end: Option<f64>,
+        pub dt: Option<f64>,
+        pub dt_min: Option<f64>,
+        pub dt_max: Option<f64>,
+        pub growth: Option<f64>,
+        pub cutback: Option<f64>,
+        pub easy_iterations: Option<i64>,
+        pub max_steps: Option<i64>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Solver {
+        pub newton: Option<String>,
+        pub max_iterations: Option<i64>,
+        pub residual_tol: Option<f64>,
+        pub energy_tol: Option<f64>,
+        pub line_search: Option<bool>,
+        pub linear: Option<String>,
+        pub preconditioner: Option<String>,
+        pub pcg_tol: Option<f64>,
+        pub pcg_max_iterations: Option<i64>,
+        pub threads: Option<i64>,
+        pub incompressible_penalty: Option<f64>,
+        pub volume_tol: Option<f64>,
+        pub max_volume_updates: Option<i64>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Output {
+        pub reactions: Option<Vec<String>>,
+        pub displacements: Option<Vec<String>>,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Source locations: key path <-> byte span, line/column
+// ---------------------------------------------------------------------------------------------
+
+struct Locator<'a> {
+    text: &'a str,
+    /// Every key and value of the document with its dotted path.
+    entries: Vec<(String, Range<usize>)>,
+    /// First byte of each path (the key for table entries, the value for array items).
+    first: HashMap<String, usize>,
+}
+
+impl<'a> Locator<'a> {
+    fn new(text: &'a str, root: &toml::de::DeTable<'_>) -> Self {
+        let mut loc = Locator {
+            text,
+            entries: Vec::new(),
+            first: HashMap::new(),
+        };
+        loc.walk_table(root, "");
+        loc
+    }
+
+    fn walk_table(&mut self, table: &toml::de::DeTable<'_>, prefix: &str) {
+        for (k, v) in table.iter() {
+            let path = if prefix.is_empty() {
+                k.get_ref().to_string()
+            } else {
+                format!("{prefix}.{}", k.get_ref())
+            };
+            let ks = k.span();
+            self.first.entry(path.clone()).or_insert(ks.start);
+            self.entries.push((path.clone(), ks));
+            self.walk_value(v.get_ref(), v.span(), &path);
+        }
+    }
+
+    fn walk_value(&mut self, v: &toml::de::DeValue<'_>, span: Range<usize>, path: &str) {
+        self.entries.push((path.to_string(), span.clone()));
+        self.first.entry(path.to_string()).or_insert(span.start);
+        match v {
+            toml::de::DeValue::Table(t) => self.walk_table(t, path),
+            toml::de::DeValue::Array(a) => {
+                for (i, item) in a.iter().enumerate() {
+                    self.walk_value(item.get_ref(), item.span(), &format!("{path}[{i}]"));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The innermost key or value whose span contains byte `pos`.
+    fn path_at(&self, pos: usize) -> Option<String> {
+        self.entries
+            .iter()
+            .filter(|(_, r)| (r.start <= pos && pos < r.end) || (r.start == pos && r.end == pos))
+            .min_by_key(|(_, r)| r.end - r.start)
+            .map(|(p, _)| p.clone())
+    }
+
+    /// Line of `path` or of its nearest ancestor present in the file.
+    fn line_of(&self, path: &str) -> Option<usize> {
+        let mut p = path;
+        loop {
+            if let Some(&pos) = self.first.get(p) {
+                return Some(line_col(self.text, pos).0);
+            }
+            let cut = p.rfind(['.', '['])?;
+            p = &p[..cut];
+            if p.is_empty() {
+                return None;
+            }
+        }
+    }
+}
+
+/// 1-based line and column (in characters) of byte `pos`.
+fn line_col(text: &str, pos: usize) -> (usize, usize) {
+    let mut pos = pos.min(text.len());
+    while !text.is_char_boundary(pos) {
+        pos -= 1;
+    }
+    let before = &text[..pos];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let col = text[line_start..pos].chars().count() + 1;
+    (line, col)
+}
+
+fn toml_error(text: &str, loc: Option<&Locator>, e: &toml::de::Error) -> CaseError {
+    let msg = e.message().trim().replace('\n', "; ");
+    match e.span() {
+        Some(span) => {
+            let (line, col) = line_col(text, span.start);
+            let key = loc.and_then(|l| l.path_at(span.start)).unwrap_or_default();
+            CaseError::new(key, format!("line {line}, column {col}: {msg}"))
+        }
+        None => CaseError::new("", format!("invalid case file: {msg}")),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation
+// ---------------------------------------------------------------------------------------------
+
+struct Cx<'a> {
+    loc: &'a Locator<'a>,
+    base_dir: &'a Path,
+}
+
+fn join_names<'s>(names: impl IntoIterator<Item = &'s str>) -> String {
+    let v: Vec<&str> = names.into_iter().collect();
+    if v.is_empty() {
+        "none".to_string()
+    } else {
+        v.join(", ")
+    }
+}
+
+fn value_num(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Integer(i) => Some(*i as f64),
+        toml::Value::Float(f) => Some(*f),
+        _ => None,
+    }
+}
+
+fn describe(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => format!("{s:?}"),
+        toml::Value::Integer(i) => i.to_string(),
+        toml::Value::Float(f) => format!("{f:?}"),
+        toml::Value::Boolean(b) => b.to_string(),
+        toml::Value::Datetime(d) => d.to_string(),
+        toml::Value::Array(a) => {
+            let mut s = String::from("[");
+            for (i, x) in a.iter().enumerate() {
+                if i > 0 {
+                    s.push_str(", ");
+                }
+                s.push_str(&describe(x));
+            }
+            s.push(']');
+            s
+        }
+        toml::Value::Table(_) => "a table".to_string(),
+    }
+}
+
+/// Allowed characters in body names (they appear in `body.set` and in CSV column names).
+fn valid_body_name(s: &str) -> bool {
+    !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
+impl Cx<'_> {
+    /// An error at `key`, with the line of the key (or its nearest ancestor) appended.
+    fn err(&self, key: &str, msg: impl Into<String>) -> CaseError {
+        let mut message = msg.into();
+        if let Some(line) = self.loc.line_of(key) {
+            let _ = write!(message, " (line {line})");
+        }
+        CaseError::new(key, message)
+    }
+
+    fn missing(&self, key: &str, expected: &str) -> CaseError {
+        self.err(key, format!("missing; expected {expected}"))
+    }
+
+    fn req<T>(&self, v: Option<T>, key: &str, expected: &str) -> Result<T, CaseError> {
+        v.ok_or_else(|| self.missing(key, expected))
+    }
+
+    /// A finite number satisfying `ok`.
+    fn num(&self, key: &str, v: f64, ok: bool, expected: &str) -> Result<f64, CaseError> {
+        if !v.is_finite() {
+            return Err(self.err(
+                key,
+                format!("value {v:?} is not a finite number; expected {expected}"),
+            ));
+        }
+        if !ok {
+            return Err(self.err(key, format!("value {v:?}; expected {expected}")));
+        }
+        Ok(v)
+    }
+
+    fn positive(&self, key: &str, v: f64, what: &str) -> Result<f64, CaseError> {
+        self.num(key, v, v > 0.0, &format!("{what} > 0"))
+    }
+
+    fn finite(&self, key: &str, v: f64, what: &str) -> Result<f64, CaseError> {
+        self.num(key, v, true, what)
+    }
+
+    fn finite2(&self, key: &str, v: [f64; 2], what: &str) -> Result<[f64; 2], CaseError> {
+        for (i, x) in v.iter().enumerate() {
+            self.finite(&format!("{key}[{i}]"), *x, what)?;
+        }
+        Ok(v)
+    }
+
+    fn count(&self, key: &str, v: i64, min: i64) -> Result<usize, CaseError> {
+        if v < min {
+            return Err(self.err(key, format!("value {v}; expected an integer >= {min}")));
+        }
+        usize::try_from(v).map_err(|_| self.err(key, format!("value {v} is too large")))
+    }
+
+    fn choice<'v>(&self, key: &str, v: &str, allowed: &[&'v str]) -> Result<&'v str, CaseError> {
+        allowed.iter().find(|a| **a == v).copied().ok_or_else(|| {
+            let list: Vec<String> = allowed.iter().map(|a| format!("\"{a}\"")).collect();
+            self.err(
+                key,
+                format!("value \"{v}\"; expected one of {}", list.join(", ")),
+            )
+        })
+    }
+
+    // ---- whole case ---------------------------------------------------------------------
+
+    fn case(&self, r: raw::Case) -> Result<Case, CaseError> {
+        let title = r.title.unwrap_or_default();
+        let formulation = match r.model.and_then(|m| m.formulation) {
+            None => Formulation::UpdatedLagrangian,
+            Some(f) => match f.as_str() {
+                "updated_lagrangian" | "ul" => Formulation::UpdatedLagrangian,
+                "total_lagrangian" | "tl" => Formulation::TotalLagrangian,
+                _ => {
+                    return Err(self.err(
+                        "model.formulation",
+                        format!(
+                            "value \"{f}\"; expected \"updated_lagrangian\" (or \"ul\") or \"total_lagrangian\" (or \"tl\")"
+                        ),
+                    ))
+                }
+            },
+        };
+
+        let raw_materials = r.materials.unwrap_or_default();
+        if raw_materials.is_empty() {
+            return Err(self.err(
+                "materials",
+                "no material defined; expected at least one [[materials]] table with name, model, youngs_modulus and poisson_ratio",
+            ));
+        }
+        let mut materials = Vec::with_capacity(raw_materials.len());
+        for (i, m) in raw_materials.into_iter().enumerate() {
+            let key = format!("materials[{i}]");
+            let spec = self.material(&key, m)?;
+            if materials.iter().any(|x: &MaterialSpec| x.name == spec.name) {
+                return Err(self.err(
+                    &format!("{key}.name"),
+                    format!(
+                        "value \"{}\": duplicated material name; expected names to be unique",
+                        spec.name
+                    ),
+                ));
+            }
+            materials.push(spec);
+        }
+
+        let raw_bodies = r.bodies.unwrap_or_default();
+        if raw_bodies.is_empty() {
+            return Err(self.err(
+                "bodies",
+                "no body defined; expected at least one [[bodies]] table with name, material, mesh_size and shape",
+            ));
+        }
+        let mut bodies: Vec<BodySpec> = Vec::with_capacity(raw_bodies.len());
+        for (i, b) in raw_bodies.into_iter().enumerate() {
+            let key = format!("bodies[{i}]");
+            let spec = self.body(&key, b, &materials)?;
+            if bodies.iter().any(|x| x.name == spec.name) {
+                return Err(self.err(
+                    &format!("{key}.name"),
+                    format!(
+                        "value \"{}\": duplicated body name; expected names to be unique",
+                        spec.name
+                    ),
+                ));
+            }
+            bodies.push(spec);
+        }
+
+        let mut boundary = Vec::new();
+        for (i, b) in r.boundary.unwrap_or_default().into_iter().enumerate() {
+            boundary.push(self.dirichlet(&format!("boundary[{i}]"), b, &bodies)?);
+        }
+        let mut loads = Vec::new();
+        for (i, l) in r.loads.unwrap_or_default().into_iter().enumerate() {
+            loads.push(self.load(&format!("loads[{i}]"), l, &bodies)?);
+        }
+
+        let time = match r.time {
+            Some(t) => self.time(t)?,
+            None => {
+                return Err(self.err(
+                    "time",
+                    "missing; expected a [time] table with at least `end` and `dt` (s)",
+                ))
+            }
+        };
+        let solver = self.solver(r.solver)?;
+        let output = self.output(r.output, &bodies)?;
+
+        Ok(Case {
+            title,
+            formulation,
+            materials,
+            bodies,
+            boundary,
+            loads,
+            time,
+            solver,
+            output,
+            base_dir: self.base_dir.to_path_buf(),
+        })
+    }
+
+    // ---- materials ----------------------------------------------------------------------
+
+    fn material(&self, key: &str, m: raw::Material) -> Result<MaterialSpec, CaseError> {
+        let name = self.req(
+            m.name,
+            &format!("{key}.name"),
+            "a unique, non-empty material name",
+        )?;
+        if name.trim().is_empty() {
+            return Err(self.err(
+                &format!("{key}.name"),
+                "empty name; expected a unique, non-empty material name",
+            ));
+        }
+        let model_key = format!("{key}.model");
+        let model = self.req(m.model, &model_key, "\"elastic\", \"j2\" or \"creep\"")?;
+        let model = self.choice(&model_key, &model, &["elastic", "j2", "creep"])?;
+
+        let e_key = format!("{key}.youngs_modulus");
+        let e = self.req(m.youngs_modulus, &e_key, "Young's modulus E > 0 (MPa)")?;
+        let e = self.positive(&e_key, e, "Young's modulus E (MPa)")?;
+        let nu_key = format!("{key}.poisson_ratio");
+        let nu = self.req(m.poisson_ratio, &nu_key, "a Poisson's ratio in [0, 0.5]")?;
+        let nu = self.num(
+            &nu_key,
+            nu,
+            (0.0..=0.5).contains(&nu),
+            "a Poisson's ratio in [0, 0.5]",
+        )?;
+        let density = match m.density {
+            None => DEFAULT_DENSITY,
+            Some(d) => self.positive(&format!("{key}.density"), d, "a density (t/mm^3)")?,
+        };
+
+        if model != "j2" {
+            if m.yield_stress.is_some() {
+                return Err(self.err(
+                    &format!("{key}.yield_stress"),
+                    format!("not allowed for model \"{model}\"; expected only with model = \"j2\""),
+                ));
+            }
+            if m.hardening.is_some() {
+                return Err(self.err(
+                    &format!("{key}.hardening"),
+                    format!("not allowed for model \"{model}\"; expected only with model = \"j2\""),
+                ));
+            }
+        }
+        if model != "creep" && m.creep.is_some() {
+            return Err(self.err(
+                &format!("{key}.creep"),
+                format!("not allowed for model \"{model}\"; expected only with model = \"creep\""),
+            ));
+        }
+
+        let material = match model {
+            "elastic" => Material::Elastic(Elastic::new(e, nu)),
+            "j2" => {
+                let table = match (m.yield_stress, m.hardening) {
+                    (Some(_), Some(_)) => {
+                        return Err(self.err(
+                            &format!("{key}.hardening"),
+                            "given together with yield_stress; expected exactly one of yield_stress (perfect plasticity) or hardening (table)",
+                        ))
+                    }
+                    (None, None) => {
+                        return Err(self.err(
+                            key,
+                            "model \"j2\" needs its yield behaviour; expected exactly one of yield_stress = <MPa> or hardening = { ... }",
+                        ))
+                    }
+                    (Some(sy), None) => {
+                        let sy = self.positive(&format!("{key}.yield_stress"), sy, "a yield stress (MPa)")?;
+                        HardeningTable::perfect(sy)
+                    }
+                    (None, Some(h)) => self.hardening(&format!("{key}.hardening"), h, e)?,
+                };
+                Material::J2(J2Plastic::new(e, nu, table))
+            }
+            _ => {
+                let c = self.req(
+                    m.creep,
+                    &format!("{key}.creep"),
+                    "a creep table, e.g. creep = { preset = \"asphalt_table2\", stress_unit = \"Pa\" }",
+                )?;
+                Material::Creep(Creep::new(e, nu, self.creep(&format!("{key}.creep"), c)?))
+            }
+        };
+        Ok(MaterialSpec {
+            name,
+            density,
+            material,
+        })
+    }
+
+    fn hardening(&self, key: &str, h: raw::Hardening, e: f64) -> Result<HardeningTable, CaseError> {
+        let sources = [h.points.is_some(), h.file.is_some(), h.preset.is_some()]
+            .iter()
+            .filter(|x| **x)
+            .count();
+        if sources != 1 {
+            return Err(self.err(
+                key,
+                format!(
+                    "{} of points, file, preset given; expected exactly one (points = [[strain, stress], ...], file = \"table.csv\" or preset = \"aluminium_250c\")",
+                    sources
+                ),
+            ));
+        }
+        if let Some(preset) = h.preset {
+            let pkey = format!("{key}.preset");
+            self.choice(&pkey, &preset, &["aluminium_250c"])?;
+            if h.strain.is_some() {
+                return Err(self.err(
+                    &format!("{key}.strain"),
+                    "not allowed with preset (the preset defines its strain measure); expected only with points or file",
+                ));
+            }
+            return HardeningTable::from_total_strain(
+                e,
+                &crate::material::hardening::aluminium_250c(),
+            )
+            .map_err(|msg| self.err(key, format!("preset \"aluminium_250c\" rejected: {msg}")));
+        }
+        let skey = format!("{key}.strain");
+        let strain = self.req(
+            h.strain,
+            &skey,
+            "the strain measure of the table: \"total\" (strain includes the elastic part) or \"plastic\"",
+        )?;
+        let strain = self.choice(&skey, &strain, &["total", "plastic"])?;
+
+        let (points, pkey) = if let Some(points) = h.points {
+            (
+                points.into_iter().map(|p| p.0).collect(),
+                format!("{key}.points"),
+            )
+        } else {
+            let file = h.file.unwrap_or_default();
+            let fkey = format!("{key}.file");
+            let path = self.base_dir.join(&file);
+            let text = std::fs::read_to_string(&path).map_err(|err| {
+                self.err(
+                    &fkey,
+                    format!("cannot read hardening table \"{}\": {err}", path.display()),
+                )
+            })?;
+            let pts = read_two_columns(&text)
+                .map_err(|msg| self.err(&fkey, format!("in \"{}\": {msg}", path.display())))?;
+            (pts, fkey)
+        };
+        self.check_table(&pkey, &points, strain)?;
+        let table = if strain == "total" {
+            HardeningTable::from_total_strain(e, &points)
+        } else {
+            HardeningTable::from_plastic_strain(&points)
+        };
+        table.map_err(|msg| self.err(key, format!("invalid hardening table: {msg}")))
+    }
+
+    /// Checks shared by both strain measures: finite, strain >= 0 and strictly increasing,
+    /// stress >= 0 and non-decreasing (softening is not supported).
+    fn check_table(&self, key: &str, pts: &[[f64; 2]], strain: &str) -> Result<(), CaseError> {
+        if pts.is_empty() {
+            return Err(self.err(
+                key,
+                "empty table; expected at least one [strain, stress] point",
+            ));
+        }
+        for (i, p) in pts.iter().enumerate() {
+            let k = format!("{key}[{i}]");
+            if !p[0].is_finite() || !p[1].is_finite() {
+                return Err(self.err(
+                    &k,
+                    format!(
+                        "value [{:?}, {:?}]; expected finite numbers [strain, stress (MPa)]",
+                        p[0], p[1]
+                    ),
+                ));
+            }
+            if p[0] < 0.0 || p[1] < 0.0 {
+                return Err(self.err(
+                    &k,
+                    format!(
+                        "value [{:?}, {:?}]; expected strain >= 0 and stress >= 0",
+                        p[0], p[1]
+                    ),
+                ));
+            }
+            if i > 0 {
+                let q = pts[i - 1];
+                if p[0] <= q[0] {
+                    return Err(self.err(
+                        &k,
+                        format!(
+                            "{strain} strain {:?} after {:?}; expected a table with strictly increasing strain",
+                            p[0], q[0]
+                        ),
+                    ));
+                }
+                if p[1] < q[1] {
+                    return Err(self.err(
+                        &k,
+                        format!(
+                            "stress {:?} MPa after {:?} MPa; expected a non-decreasing (hardening) stress, softening is not supported",
+                            p[1], q[1]
+                        ),
+                    ));
+                }
+            }
+        }
+        if strain == "plastic" && pts[0][1] <= 0.0 {
+            return Err(self.err(
+                &format!("{key}[0]"),
+                format!("initial yield stress {:?}; expected the first point's stress (the initial yield stress) > 0", pts[0][1]),
+            ));
+        }
+        Ok(())
+    }
+
+    fn creep(&self, key: &str, c: raw::Creep) -> Result<CreepParams, CaseError> {
+        let ukey = format!("{key}.stress_unit");
+        let unit = c.stress_unit.ok_or_else(|| {
+            self.err(
+                &ukey,
+                "missing; expected \"Pa\", \"kPa\", \"MPa\" or \"GPa\": the stress unit the creep coefficient A was fitted in. \
+                 The paper does not state it, and because the creep rate goes as A·(s·σ)^n with s the unit factor, the choice changes the creep rate \
+                 by orders of magnitude (a factor 10^(6n) between \"Pa\" and \"MPa\"), so there is no safe default",
+            )
+        })?;
+        let stress_scale = match self.choice(&ukey, &unit, &["Pa", "kPa", "MPa", "GPa"])? {
+            "Pa" => 1e6,
+            "kPa" => 1e3,
+            "MPa" => 1.0,
+            _ => 1e-3,
+        };
+        let base = match &c.preset {
+            Some(p) => {
+                self.choice(&format!("{key}.preset"), p, &["asphalt_table2"])?;
+                Some(ASPHALT_TABLE2)
+            }
+            None => None,
+        };
+        let need = |v: Option<f64>,
+                    name: &str,
+                    preset: Option<f64>,
+                    what: &str|
+         -> Result<f64, CaseError> {
+            match v.or(preset) {
+                Some(x) => Ok(x),
+                None => Err(self.missing(&format!("{key}.{name}"), what)),
+            }
+        };
+        let a = need(
+            c.a,
+            "A",
+            base.map(|b| b.a),
+            "the creep coefficient A > 0 (or preset = \"asphalt_table2\")",
+        )?;
+        let n = need(
+            c.n,
+            "n",
+            base.map(|b| b.n),
+            "the stress exponent n > 0 (or preset = \"asphalt_table2\")",
+        )?;
+        let q = need(
+            c.q,
+            "q",
+            base.map(|b| b.q),
+            "the time exponent q > 0 (or preset = \"asphalt_table2\")",
+        )?;
+        let temperature = need(
+            c.temperature,
+            "temperature",
+            base.map(|b| b.temperature),
+            "a temperature T > 0 (or preset = \"asphalt_table2\")",
+        )?;
+        let m = c.m.or(base.map(|b| b.m)).unwrap_or(0.0);
+        let p = c.p.or(base.map(|b| b.p)).unwrap_or(0.0);
+        let a = self.positive(&format!("{key}.A"), a, "the creep coefficient A")?;
+        let n = self.positive(&format!("{key}.n"), n, "the stress exponent n")?;
+        let m = self.num(
+            &format!("{key}.m"),
+            m,
+            m < 1.0,
+            "the strain-hardening exponent m < 1",
+        )?;
+        let p = self.finite(&format!("{key}.p"), p, "a finite temperature exponent p")?;
+        let q = self.positive(&format!("{key}.q"), q, "the time exponent q")?;
+        let temperature = self.positive(
+            &format!("{key}.temperature"),
+            temperature,
+            "a temperature T",
+        )?;
+        Ok(CreepParams {
+            a,
+            n,
+            m,
+            p,
+            q,
+            temperature,
+            stress_scale,
+        })
+    }
+
+    // ---- bodies -------------------------------------------------------------------------
+
+    fn body(
+        &self,
+        key: &str,
+        b: raw::Body,
+        materials: &[MaterialSpec],
+    ) -> Result<BodySpec, CaseError> {
+        let nkey = format!("{key}.name");
+        let name = self.req(
+            b.name,
+            &nkey,
+            "a unique body name of letters, digits, '_' and '-'",
+        )?;
+        if !valid_body_name(&name) {
+            return Err(self.err(
+                &nkey,
+                format!("value \"{name}\"; expected a non-empty name of ASCII letters, digits, '_' and '-' (it is used in \"body.set\" references and CSV column names)"),
+            ));
+        }
+        let mkey = format!("{key}.material");
+        let mat_name = self.req(b.material, &mkey, "the name of a material")?;
+        let material = materials
+            .iter()
+            .position(|m| m.name == mat_name)
+            .ok_or_else(|| {
+                self.err(
+                    &mkey,
+                    format!(
+                        "value \"{mat_name}\": no material named \"{mat_name}\" (known: {})",
+                        join_names(materials.iter().map(|m| m.name.as_str()))
+                    ),
+                )
+            })?;
+        let shape = match b.shape {
+            Some(s) => self.shape(&format!("{key}.shape"), s)?,
+            None => {
+                return Err(self.missing(
+                    &format!("{key}.shape"),
+                    "a shape, e.g. shape = { type = \"rectangle\", origin = [0.0, 0.0], size = [20.0, 20.0] }",
+                ))
+            }
+        };
+        let dkey = format!("{key}.divisions");
+        let divisions = match b.divisions {
+            None => None,
+            Some(raw::Pair(d)) => {
+                if !matches!(
+                    shape,
+                    ShapeSpec::Rectangle { .. } | ShapeSpec::Cook | ShapeSpec::AnnulusSector { .. }
+                ) {
+                    return Err(self.err(
+                        &dkey,
+                        format!(
+                            "not allowed for shape type \"{}\"; expected divisions only for rectangle, cook and annulus_sector (use mesh_size)",
+                            shape.type_name()
+                        ),
+                    ));
+                }
+                let mut out = [0usize; 2];
+                for (i, v) in d.iter().enumerate() {
+                    if !(1..=MAX_DIVISIONS).contains(v) {
+                        return Err(self.err(
+                            &format!("{dkey}[{i}]"),
+                            format!(
+                                "value {v}; expected a number of divisions in [1, {MAX_DIVISIONS}]"
+                            ),
+                        ));
+                    }
+                    out[i] = usize::try_from(*v).map_err(|_| {
+                        self.err(&format!("{dkey}[{i}]"), format!("value {v} is too large"))
+                    })?;
+                }
+                Some(out)
+            }
+        };
+        let hkey = format!("{key}.mesh_size");
+        let mesh_size = match (b.mesh_size, divisions) {
+            (Some(h), _) => self.positive(&hkey, h, "a target element edge length h (mm)")?,
+            (None, Some(d)) => implied_mesh_size(&shape, d),
+            (None, None) => {
+                return Err(self.missing(
+                    &hkey,
+                    "a target element edge length h > 0 (mm), or divisions = [nx, ny]",
+                ))
+            }
+        };
+        Ok(BodySpec {
+            name,
+            material,
+            shape,
+            mesh_size,
+            divisions,
+        })
+    }
+
+    fn shape(&self, key: &str, s: raw::Shape) -> Result<ShapeSpec, CaseError> {
+        let tkey = format!("{key}.type");
+        let kind = self.req(
+            s.kind.clone(),
+            &tkey,
+            "\"rectangle\", \"disc\", \"ellipse\", \"polygon\", \"cook\" or \"annulus_sector\"",
+        )?;
+        let kind = self.choice(
+            &tkey,
+            &kind,
+            &[
+                "rectangle",
+                "disc",
+                "ellipse",
+                "polygon",
+                "cook",
+                "annulus_sector",
+            ],
+        )?;
+        let allowed: &[&str] = match kind {
+            "rectangle" => &["origin", "size"],
+            "disc" => &["center", "radius"],
+            "ellipse" => &["center", "semi_axes", "angle"],
+            "polygon" => &["vertices"],
+            "cook" => &[],
+            _ => &["center", "inner_radius", "outer_radius", "angles"],
+        };
+        let present = [
+            ("origin", s.origin.is_some()),
+            ("size", s.size.is_some()),
+            ("center", s.center.is_some()),
+            ("radius", s.radius.is_some()),
+            ("semi_axes", s.semi_axes.is_some()),
+            ("angle", s.angle.is_some()),
+            ("vertices", s.vertices.is_some()),
+            ("inner_radius", s.inner_radius.is_some()),
+            ("outer_radius", s.outer_radius.is_some()),
+            ("angles", s.angles.is_some()),
+        ];
+        for (field, is) in present {
+            if is && !allowed.contains(&field) {
+                return Err(self.err(
+                    &format!("{key}.{field}"),
+                    format!(
+                        "not a parameter of shape type \"{kind}\"; expected only: {}",
+                        if allowed.is_empty() {
+                            "type".to_string()
+                        } else {
+                            format!("type, {}", allowed.join(", "))
+                        }
+                    ),
+                ));
+            }
+        }
+        let center = |cx: &Self| -> Result<[f64; 2], CaseError> {
+            cx.finite2(
+                &format!("{key}.center"),
+                s.center.map_or([0.0, 0.0], |p| p.0),
+                "a finite centre coordinate (mm)",
+            )
+        };
+        Ok(match kind {
+            "rectangle" => {
+                let origin = self.finite2(
+                    &format!("{key}.origin"),
+                    s.origin.map_or([0.0, 0.0], |p| p.0),
+                    "a finite coordinate (mm)",
+                )?;
+                let skey = format!("{key}.size");
+                let size = self.req(
+                    s.size.map(|p| p.0),
+                    &skey,
+                    "size = [width, height] > 0 (mm)",
+                )?;
+                for (i, v) in size.iter().enumerate() {
+                    self.positive(&format!("{skey}[{i}]"), *v, "a side length (mm)")?;
+                }
+                ShapeSpec::Rectangle { origin, size }
+            }
+            "disc" => {
+                let center = center(self)?;
+                let rkey = format!("{key}.radius");
+                let r = self.req(s.radius, &rkey, "a radius > 0 (mm)")?;
+                let radius = self.positive(&rkey, r, "a radius (mm)")?;
+                ShapeSpec::Disc { center, radius }
+            }
+            "ellipse" => {
+                let center = center(self)?;
+                let akey = format!("{key}.semi_axes");
+                let semi_axes = self.req(
+                    s.semi_axes.map(|p| p.0),
+                    &akey,
+                    "semi_axes = [a, b] > 0 (mm)",
+                )?;
+                for (i, v) in semi_axes.iter().enumerate() {
+                    self.positive(&format!("{akey}[{i}]"), *v, "a semi-axis (mm)")?;
+                }
+                let angle_deg = self.finite(
+                    &format!("{key}.angle"),
+                    s.angle.unwrap_or(0.0),
+                    "a finite angle (degrees)",
+                )?;
+                ShapeSpec::Ellipse {
+                    center,
+                    semi_axes,
+                    angle_deg,
+                }
+            }
+            "polygon" => {
+                let vkey = format!("{key}.vertices");
+                let vertices: Vec<[f64; 2]> = self
+                    .req(
+                        s.vertices,
+                        &vkey,
+                        "at least 3 vertices [[x0, y0], [x1, y1], ...] (mm)",
+                    )?
+                    .into_iter()
+                    .map(|p| p.0)
+                    .collect();
+                if vertices.len() < 3 {
+                    return Err(self.err(
+                        &vkey,
+                        format!("{} vertices; expected at least 3", vertices.len()),
+                    ));
+                }
+                for (i, v) in vertices.iter().enumerate() {
+                    self.finite2(
+                        &format!("{vkey}[{i}]"),
+                        *v,
+                        "a finite vertex coordinate (mm)",
+                    )?;
+                }
+                let n = vertices.len();
+                let area2: f64 = (0..n)
+                    .map(|i| {
+                        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+                        a[0] * b[1] - b[0] * a[1]
+                    })
+                    .sum();
+                let scale = vertices
+                    .iter()
+                    .fold(0.0f64, |m, v| m.max(v[0].abs()).max(v[1].abs()))
+                    .max(1e-300);
+                if area2.abs() <= 1e-12 * scale * scale {
+                    return Err(self.err(
+                        &vkey,
+                        "the polygon has zero area; expected vertices of a convex polygon",
+                    ));
+                }
+                ShapeSpec::Polygon { vertices }
+            }
+            "cook" => ShapeSpec::Cook,
+            _ => {
+                let center = center(self)?;
+                let ikey = format!("{key}.inner_radius");
+                let okey = format!("{key}.outer_radius");
+                let ri = self.req(s.inner_radius, &ikey, "an inner radius > 0 (mm)")?;
+                let ri = self.positive(&ikey, ri, "an inner radius (mm)")?;
+                let ro = self.req(s.outer_radius, &okey, "an outer radius > inner_radius (mm)")?;
+                let ro = self.num(
+                    &okey,
+                    ro,
+                    ro > ri,
+                    &format!("an outer radius > inner_radius = {ri:?} (mm)"),
+                )?;
+                let gkey = format!("{key}.angles");
+                let angles = self.req(
+                    s.angles.map(|p| p.0),
+                    &gkey,
+                    "angles = [start, end] in degrees",
+                )?;
+                let angles = self.finite2(&gkey, angles, "finite angles (degrees)")?;
+                let span = angles[1] - angles[0];
+                if !(span > 0.0 && span <= 360.0) {
+                    return Err(self.err(
+                        &gkey,
+                        format!("value [{:?}, {:?}]; expected start < end and end - start <= 360 degrees (360 = full ring)", angles[0], angles[1]),
+                    ));
+                }
+                ShapeSpec::AnnulusSector {
+                    center,
+                    inner_radius: ri,
+                    outer_radius: ro,
+                    angles_deg: angles,
+                }
+            }
+        })
+    }
+
+    /// Resolve `body` / `set` references of a boundary condition or a load.
+    fn body_set(
+        &self,
+        key: &str,
+        body: Option<String>,
+        set: Option<String>,
+        bodies: &[BodySpec],
+    ) -> Result<(usize, String), CaseError> {
+        let bkey = format!("{key}.body");
+        let name = self.req(body, &bkey, "the name of a body")?;
+        let bi = self.find_body(&bkey, &name, bodies)?;
+        let skey = format!("{key}.set");
+        let set = self.req(
+            set,
+            &skey,
+            &format!(
+                "an edge set of body \"{name}\" ({})",
+                bodies[bi].shape.edge_set_names().join(", ")
+            ),
+        )?;
+        self.check_set(&skey, &bodies[bi], &set)?;
+        Ok((bi, set))
+    }
+
+    fn find_body(&self, key: &str, name: &str, bodies: &[BodySpec]) -> Result<usize, CaseError> {
+        bodies.iter().position(|b| b.name == name).ok_or_else(|| {
+            self.err(
+                key,
+                format!(
+                    "value \"{name}\": no body named \"{name}\" (known: {})",
+                    join_names(bodies.iter().map(|b| b.name.as_str()))
+                ),
+            )
+        })
+    }
+
+    fn check_set(&self, key: &str, body: &BodySpec, set: &str) -> Result<(), CaseError> {
+        let names = body.shape.edge_set_names();
+        if names.iter().any(|n| n == set) {
+            Ok(())
+        } else {
+            Err(self.err(
+                key,
+                format!(
+                    "value \"{set}\": body \"{}\" ({}) has no edge set \"{set}\" (known: {})",
+                    body.name,
+                    body.shape.type_name(),
+                    names.join(", ")
+                ),
+            ))
+        }
+    }
+
+    fn amplitude(&self, key: &str, v: Option<toml::Value>) -> Result<Amplitude, CaseError> {
+        const EXPECTED: &str = "\"ramp\", \"constant\" or a table [[t0, f0], [t1, f1], ...] with strictly increasing times";
+        let Some(v) = v else {
+            return Ok(Amplitude::Ramp);
+        };
+        match &v {
+            toml::Value::String(s) => match s.as_str() {
+                "ramp" => Ok(Amplitude::Ramp),
+                "constant" => Ok(Amplitude::Constant),
+                _ => Err(self.err(key, format!("value \"{s}\"; expected {EXPECTED}"))),
+            },
+            toml::Value::Array(items) => {
+                if items.is_empty() {
+                    return Err(self.err(key, format!("empty table; expected {EXPECTED}")));
+                }
+                let mut pts: Vec<[f64; 2]> = Vec::with_capacity(items.len());
+                for (i, item) in items.iter().enumerate() {
+                    let ikey = format!("{key}[{i}]");
+                    let pair = match item {
+                        toml::Value::Array(p) if p.len() == 2 => {
+                            match (value_num(&p[0]), value_num(&p[1])) {
+                                (Some(t), Some(f)) => [t, f],
+                                _ => return Err(self.err(
+                                    &ikey,
+                                    format!(
+                                        "value {}; expected a pair of numbers [time (s), factor]",
+                                        describe(item)
+                                    ),
+                                )),
+                            }
+                        }
+                        _ => {
+                            return Err(self.err(
+                                &ikey,
+                                format!(
+                                    "value {}; expected a pair of numbers [time (s), factor]",
+                                    describe(item)
+                                ),
+                            ))
+                        }
+                    };
+                    self.finite2(&ikey, pair, "finite [time (s), factor]")?;
+                    if let Some(prev) = pts.last() {
+                        if pair[0] <= prev[0] {
+                            return Err(self.err(
+                                &ikey,
+                                format!(
+                                    "time {:?} after {:?}; expected strictly increasing times",
+                                    pair[0], prev[0]
+                                ),
+                            ));
+                        }
+                    }
+                    pts.push(pair);
+                }
+                Ok(Amplitude::Table(pts))
+            }
+            other => Err(self.err(
+                key,
+                format!("value {}; expected {EXPECTED}", describe(other)),
+            )),
+        }
+    }
+
+    fn dirichlet(
+        &self,
+        key: &str,
+        b: raw::Boundary,
+        bodies: &[BodySpec],
+    ) -> Result<DirichletSpec, CaseError> {
+        let (body, set) = self.body_set(key, b.body, b.set, bodies)?;
+        let ux =
+            b.ux.map(|v| self.finite(&format!("{key}.ux"), v, "a finite displacement (mm)"))
+                .transpose()?;
+        let uy =
+            b.uy.map(|v| self.finite(&format!("{key}.uy"), v, "a finite displacement (mm)"))
+                .transpose()?;
+        let radial = b
+            .radial
+            .map(|v| {
+                self.finite(
+                    &format!("{key}.radial"),
+                    v,
+                    "a finite radial displacement (mm)",
+                )
+            })
+            .transpose()?;
+        if ux.is_none() && uy.is_none() && radial.is_none() {
+            return Err(self.err(
+                key,
+                "no displacement given; expected at least one of ux, uy (mm) or radial (mm)",
+            ));
+        }
+        if radial.is_some() {
+            if ux.is_some() || uy.is_some() {
+                return Err(self.err(
+                    &format!("{key}.radial"),
+                    "given together with ux/uy; expected either radial or ux/uy in one [[boundary]] entry",
+                ));
+            }
+            let shape = &bodies[body].shape;
+            if shape.center().is_none() {
+                return Err(self.err(
+                    &format!("{key}.radial"),
+                    format!(
+                        "not available for shape type \"{}\"; expected radial only on disc, ellipse or annulus_sector bodies",
+                        shape.type_name()
+                    ),
+                ));
+            }
+        }
+        let amplitude = self.amplitude(&format!("{key}.amplitude"), b.amplitude)?;
+        Ok(DirichletSpec {
+            body,
+            set,
+            ux,
+            uy,
+            radial,
+            amplitude,
+        })
+    }
+
+    fn load(&self, key: &str, l: raw::Load, bodies: &[BodySpec]) -> Result<LoadSpec, CaseError> {
+        let (body, set) = self.body_set(key, l.body, l.set, bodies)?;
+        let tkey = format!("{key}.type");
+        let kind = self.req(l.kind, &tkey, "\"traction\", \"pressure\" or \"force\"")?;
+        let kind = self.choice(&tkey, &kind, &["traction", "pressure", "force"])?;
+        let vkey = format!("{key}.value");
+        let v = self.req(
+            l.value,
+            &vkey,
+            if kind == "pressure" {
+                "a pressure p (MPa)"
+            } else {
+                "a vector [x, y]"
+            },
+        )?;
+        let vector = |what: &str| -> Result<[f64; 2], CaseError> {
+            match &v {
+                toml::Value::Array(a) if a.len() == 2 => match (value_num(&a[0]), value_num(&a[1]))
+                {
+                    (Some(x), Some(y)) => self.finite2(&vkey, [x, y], &format!("a finite {what}")),
+                    _ => Err(self.err(
+                        &vkey,
+                        format!(
+                            "value {}; expected {what} as two numbers [x, y]",
+                            describe(&v)
+                        ),
+                    )),
+                },
+                _ => Err(self.err(
+                    &vkey,
+                    format!(
+                        "value {}; expected {what} as two numbers [x, y]",
+                        describe(&v)
+                    ),
+                )),
+            }
+        };
+        let kind = match kind {
+            "traction" => LoadKind::Traction(vector("traction [tx, ty] (MPa)")?),
+            "force" => LoadKind::Force(vector("force [Fx, Fy] (N/mm)")?),
+            _ => match value_num(&v) {
+                Some(p) => LoadKind::Pressure(self.finite(&vkey, p, "a finite pressure (MPa)")?),
+                None => {
+                    return Err(self.err(
+                        &vkey,
+                        format!(
+                            "value {}; expected a single number, the pressure p (MPa)",
+                            describe(&v)
+                        ),
+                    ))
+                }
+            },
+        };
+        let amplitude = self.amplitude(&format!("{key}.amplitude"), l.amplitude)?;
+        Ok(LoadSpec {
+            body,
+            set,
+            kind,
+            amplitude,
+        })
+    }
+
+    // ---- time, solver, output -----------------------------------------------------------
+
+    fn time(&self, t: raw::Time) -> Result<TimeSpec, CaseError> {
+        let end = self.req(t.end, "time.end", "the end time > 0 (s)")?;
+        let end = self.positive("time.end", end, "the end time (s)")?;
+        let dt = self.req(t.dt, "time.dt", "the initial time step, 0 < dt <= end (s)")?;
+        let dt = self.num(
+            "time.dt",
+            dt,
+            dt > 0.0 && dt <= end,
+            &format!("an initial time step 0 < dt <= end = {end:?} (s)"),
+        )?;
+        let mut s = TimeSpec::new(end, dt);
+        if let Some(v) = t.dt_min {
+            s.dt_min = self.num(
+                "time.dt_min",
+                v,
+                v > 0.0 && v <= dt,
+                &format!("a minimum step 0 < dt_min <= dt = {dt:?} (s)"),
+            )?;
+        }
+        if let Some(v) = t.dt_max {
+            s.dt_max = self.num(
+                "time.dt_max",
+                v,
+                v >= dt,
+                &format!("a maximum step dt_max >= dt = {dt:?} (s)"),
+            )?;
+        }
+        if let Some(v) = t.growth {
+            s.growth = self.num("time.growth", v, v >= 1.0, "a step growth factor >= 1")?;
+        }
+        if let Some(v) = t.cutback {
+            s.cutback = self.num(
+                "time.cutback",
+                v,
+                v > 0.0 && v < 1.0,
+                "a cut-back factor in (0, 1)",
+            )?;
+        }
+        if let Some(v) = t.easy_iterations {
+            s.easy_iterations = self.count("time.easy_iterations", v, 1)?;
+        }
+        if let Some(v) = t.max_steps {
+            s.max_steps = self.count("time.max_steps", v, 1)?;
+        }
+        Ok(s)
+    }
+
+    fn solver(&self, r: Option<raw::Solver>) -> Result<SolverSpec, CaseError> {
+        let mut s = SolverSpec::default();
+        let Some(r) = r else { return Ok(s) };
+        if let Some(v) = &r.newton {
+            s.newton = match self.choice("solver.newton", v, &["full", "modified"])? {
+                "full" => NewtonKind::Full,
+                _ => NewtonKind::Modified,
+            };
+        }
+        s.max_iterations = match r.max_iterations {
+            Some(v) => self.count("solver.max_iterations", v, 1)?,
+            None if s.newton == NewtonKind::Modified => 60,
+            None => 25,
+        };
+        if let Some(v) = r.residual_tol {
+            s.residual_tol =
+                self.positive("solver.residual_tol", v, "a relative residual tolerance")?;
+        }
+        if let Some(v) = r.energy_tol {
+            s.energy_tol = self.positive("solver.energy_tol", v, "a relative energy tolerance")?;
+        }
+        if let Some(v) = r.line_search {
+            s.line_search = v;
+        }
+        if let Some(v) = &r.linear {
+            s.linear = match self.choice("solver.linear", v, &["auto", "lu", "cholesky", "pcg"])? {
+                "auto" => LinearChoice::Auto,
+                "lu" => LinearChoice::Fixed(LinearSolverKind::Lu),
+                "cholesky" => LinearChoice::Fixed(LinearSolverKind::Cholesky),
+                _ => LinearChoice::Fixed(LinearSolverKind::Pcg),
+            };
+        }
+        if let Some(v) = &r.preconditioner {
+            s.preconditioner = match self.choice("solver.preconditioner", v, &["ic0", "jacobi"])? {
+                "ic0" => Preconditioner::Ic0,
+                _ => Preconditioner::Jacobi,
+            };
+        }
+        if let Some(v) = r.pcg_tol {
+            s.pcg_tol = self.positive("solver.pcg_tol", v, "a PCG relative tolerance")?;
+        }
+        if let Some(v) = r.pcg_max_iterations {
+            s.pcg_max_iterations = self.count("solver.pcg_max_iterations", v, 1)?;
+        }
+        if let Some(v) = r.threads {
+            s.threads = self.count("solver.threads", v, 0)?;
+        }
+        if let Some(v) = r.incompressible_penalty {
+            s.incompressible_penalty = self.positive(
+                "solver.incompressible_penalty",
+                v,
+                "a penalty (in units of the shear modulus)",
+            )?;
+        }
+        if let Some(v) = r.volume_tol {
+            s.volume_tol = self.positive("solver.volume_tol", v, "a volume tolerance")?;
+        }
+        if let Some(v) = r.max_volume_updates {
+            s.max_volume_updates = self.count("solver.max_volume_updates", v, 1)?;
+        }
+        Ok(s)
+    }
+
+    fn output(&self, r: Option<raw::Output>, bodies: &[BodySpec]) -> Result<OutputSpec, CaseError> {
+        let mut out = OutputSpec::default();
+        let Some(r) = r else { return Ok(out) };
+        out.reactions =
+            self.output_list("output.reactions", r.reactions.unwrap_or_default(), bodies)?;
+        out.displacements = self.output_list(
+            "output.displacements",
+            r.displacements.unwrap_or_default(),
+            bodies,
+        )?;
+        Ok(out)
+    }
+
+    fn output_list(
+        &self,
+        key: &str,
+        items: Vec<String>,
+        bodies: &[BodySpec],
+    ) -> Result<Vec<(usize, String)>, CaseError> {
+        let mut seen = HashSet::new();
+        let mut out = Vec::with_capacity(items.len());
+        for (i, item) in items.iter().enumerate() {
+            let ikey = format!("{key}[{i}]");
+            let Some((body, set)) = item.rsplit_once('.') else {
+                return Err(self.err(
+                    &ikey,
+                    format!("value \"{item}\"; expected \"body.set\", e.g. \"block.top\""),
+                ));
+            };
+            let bi = self.find_body(&ikey, body, bodies)?;
+            self.check_set(&ikey, &bodies[bi], set)?;
+            if !seen.insert(item.as_str()) {
+                return Err(self.err(
+                    &ikey,
+                    format!("value \"{item}\" is listed twice; expected each entry once"),
+                ));
+            }
+            out.push((bi, set.to_string()));
+        }
+        Ok(out)
+    }
+}
+
+/// A representative element size when only `divisions` are given.
+fn implied_mesh_size(shape: &ShapeSpec, d: [usize; 2]) -> f64 {
+    let (a, b) = match shape {
+        ShapeSpec::Rectangle { size, .. } => (size[0], size[1]),
+        ShapeSpec::Cook => (48.0, 44.0),
+        ShapeSpec::AnnulusSector {
+            inner_radius,
+            outer_radius,
+            angles_deg,
+            ..
+        } => (
+            outer_radius - inner_radius,
+            outer_radius * (angles_deg[1] - angles_deg[0]).to_radians(),
+        ),
+        _ => (1.0, 1.0),
+    };
+    (a / d[0].max(1) as f64).max(b / d[1].max(1) as f64)
+}
+
+/// Read a two-column numeric table (`strain, stress`): separators `,` `;` tab or spaces,
+/// `#` starts a comment, one header line before the data is allowed.
+fn read_two_columns(text: &str) -> Result<Vec<[f64; 2]>, String> {
+    let mut pts = Vec::new();
+    let mut header_seen = false;
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line
+            .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .collect();
+        let nums: Option<Vec<f64>> = fields.iter().map(|f| f.parse::<f64>().ok()).collect();
+        match nums {
+            Some(v) if v.len() == 2 => pts.push([v[0], v[1]]),
+            None if pts.is_empty() && !header_seen => header_seen = true,
+            _ => {
+                return Err(format!(
+                    "line {}: \"{line}\"; expected two numbers per line (strain, stress in MPa)",
+                    i + 1
+                ))
+            }
+        }
+    }
+    if pts.is_empty() {
+        return Err("no data; expected lines of two numbers (strain, stress in MPa)".to_string());
+    }
+    Ok(pts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn amplitude_values() {
+        assert_eq!(Amplitude::Ramp.at(0.5, 2.0), 0.25);
+        assert_eq!(Amplitude::Ramp.at(3.0, 2.0), 1.0);
+        assert_eq!(Amplitude::Constant.at(0.0, 2.0), 1.0);
+        let t = Amplitude::Table(vec![[0.0, 0.0], [1.0, 2.0], [2.0, 2.0]]);
+        assert_eq!(t.at(-1.0, 2.0), 0.0);
+        assert_eq!(t.at(0.5, 2.0), 1.0);
+        assert_eq!(t.at(5.0, 2.0), 2.0);
+    }
+
+    #[test]
+    fn edge_sets() {
+        let p = ShapeSpec::Polygon {
+            vertices: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+        };
+        assert_eq!(p.edge_set_names(), ["boundary", "side0", "side1", "side2"]);
+        assert_eq!(
+            ShapeSpec::Cook.edge_set_names(),
+            ["left", "right", "bottom", "top", "boundary"]
+        );
+        assert_eq!(ShapeSpec::Cook.center(), None);
+    }
+
+    #[test]
+    fn two_column_reader() {
+        let pts =
+            read_two_columns("# comment\nstrain,stress\n0, 1\n0.1;2 # x\n\n0.2\t3\n").unwrap();
+        assert_eq!(pts, vec![[0.0, 1.0], [0.1, 2.0], [0.2, 3.0]]);
+        assert!(read_two_columns("a,b\n1,2\nx,y\n")
+            .unwrap_err()
+            .contains("line 3"));
+        assert!(read_two_columns("# nothing\n").is_err());
+    }
+
+    #[test]
+    fn line_and_column() {
+        assert_eq!(line_col("ab\ncd", 4), (2, 2));
+        assert_eq!(line_col("", 10), (1, 1));
+    }
+}

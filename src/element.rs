@@ -1,1 +1,363 @@
-//! (being written)
+//! The four-node isoparametric plane-strain element in Bathe's incremental form, total and
+//! updated Lagrangian, with a mean-dilatation (Q1/P0) volumetric part that does not lock.
+//!
+//! ## Deviatoric part (per Gauss point, 2×2 Gauss rule)
+//! The law returns the deviatoric Kirchhoff stress τ′ and its spatial tangent c (see
+//! [`crate::material`]). With N_a the bilinear shape functions:
+//!
+//! - **Total Lagrangian** (paper eq. 5–11; Bathe ch. 6.3): second Piola–Kirchhoff stress
+//!   S = F⁻¹ τ′ F⁻ᵀ and material tangent D = T c Tᵀ (T the Voigt push-back of F⁻¹), with
+//!   `₀B_L` (3×8, rows δE₁₁, δE₂₂, 2δE₁₂, holding the initial-displacement effect through F)
+//!   and `₀B_NL` (4×8, rows ∂u₁/∂X₁, ∂u₁/∂X₂, ∂u₂/∂X₁, ∂u₂/∂X₂):
+//!   `F = ∫ B_Lᵀ Ŝ dV₀`, `K_L = ∫ B_Lᵀ D B_L dV₀`, `K_NL = ∫ B_NLᵀ [S 0; 0 S] B_NL dV₀`.
+//! - **Updated Lagrangian** (paper eq. 12–17): Cauchy stress σ′ = τ′/J and tangent c/J on the
+//!   current configuration, `ₜB_L` the small-strain operator in current coordinates:
+//!   `F = ∫ B_Lᵀ σ̂′ dv`, `K_L = ∫ B_Lᵀ (c/J) B_L dv`, `K_NL = ∫ B_NLᵀ [σ′ 0; 0 σ′] B_NL dv`.
+//!
+//! The two are the same linearisation written in two configurations, so they agree to
+//! round-off (a test checks it).
+//!
+//! ## Volumetric part (mean dilatation; Simo, Taylor & Pister 1985; Bathe's u/p with a
+//! condensed constant pressure)
+//! With v_e the current and V_e the reference element area (shoelace formula, exact for the
+//! bilinear quadrilateral) and Θ = v_e/V_e, the element stores the volumetric energy
+//! `V_e U(Θ) + λ_e (v_e − V_e)`, U(Θ) = ½ κ (ln Θ)², so the element pressure (Cauchy, mean
+//! stress, positive in tension) is `p = λ_e + κ ln Θ / Θ`, giving Kirchhoff pressure κ ln Θ for
+//! λ_e = 0 as in Hencky elasticity. Then
+//! `f_vol = p g`, `K_vol = (U″(Θ)/V_e) g gᵀ + p H` with g = ∂v_e/∂x and H = ∂²v_e/∂x² (constant).
+//! - compressible law: κ = K (bulk modulus), λ_e = 0;
+//! - incompressible law (ν = 0.5): κ is a penalty and λ_e an augmented-Lagrangian multiplier
+//!   updated by the driver (Uzawa: λ_e ← p) until |Θ − 1| is below a tolerance.
+
+use crate::case::Formulation;
+use crate::material::{ConstitutiveLaw, MatResponse, MatState, MaterialError, TimeIncrement};
+use nalgebra::Matrix3;
+
+/// Gauss points of the 2×2 rule (ξ, η); all weights are 1.
+const G: f64 = 0.577_350_269_189_625_8;
+pub const GAUSS: [[f64; 2]; 4] = [[-G, -G], [G, -G], [G, G], [-G, G]];
+const XI_A: [f64; 4] = [-1.0, 1.0, 1.0, -1.0];
+const ETA_A: [f64; 4] = [-1.0, -1.0, 1.0, 1.0];
+
+/// Shape functions N_a(ξ, η).
+pub fn shape(xi: f64, eta: f64) -> [f64; 4] {
+    let mut n = [0.0; 4];
+    for a in 0..4 {
+        n[a] = 0.25 * (1.0 + XI_A[a] * xi) * (1.0 + ETA_A[a] * eta);
+    }
+    n
+}
+
+/// Derivatives ∂N_a/∂ξ, ∂N_a/∂η.
+pub fn shape_derivs(xi: f64, eta: f64) -> [[f64; 2]; 4] {
+    let mut d = [[0.0; 2]; 4];
+    for a in 0..4 {
+        d[a][0] = 0.25 * XI_A[a] * (1.0 + ETA_A[a] * eta);
+        d[a][1] = 0.25 * ETA_A[a] * (1.0 + XI_A[a] * xi);
+    }
+    d
+}
+
+/// Volumetric treatment of one element.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Volumetric {
+    /// κ: bulk modulus (compressible) or penalty (incompressible), MPa.
+    pub kappa: f64,
+    /// λ_e: augmented-Lagrangian multiplier (a pressure, MPa); 0 for compressible laws.
+    pub lambda: f64,
+}
+
+/// Gauss-point output of an element evaluation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaussOut {
+    /// Cauchy stress `[xx, yy, xy, zz]` = τ′/J + p I (MPa).
+    pub sig: [f64; 4],
+    /// New (uncommitted) material state.
+    pub state: MatState,
+}
+
+/// What one element contributes: internal force, tangent, Gauss-point results, pressure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementOut {
+    /// Internal force vector (N/mm), dof order `[x0, y0, x1, y1, …]`.
+    pub f_int: [f64; 8],
+    /// Tangent stiffness ∂f_int/∂x (N/mm²); left zero when not requested.
+    pub kk: [[f64; 8]; 8],
+    pub gauss: [GaussOut; 4],
+    /// Element pressure p (Cauchy, MPa, positive in tension).
+    pub pressure: f64,
+    /// Area ratio Θ = v_e/V_e.
+    pub theta: f64,
+}
+
+impl Default for ElementOut {
+    fn default() -> Self {
+        Self {
+            f_int: [0.0; 8],
+            kk: [[0.0; 8]; 8],
+            gauss: [GaussOut { sig: [0.0; 4], state: MatState::default() }; 4],
+            pressure: 0.0,
+            theta: 1.0,
+        }
+    }
+}
+
+/// Shoelace area of a quadrilateral and its gradient g = ∂v/∂x (dof order x0, y0, x1, …).
+pub fn quad_area_grad(x: &[[f64; 2]; 4]) -> (f64, [f64; 8]) {
+    let mut v = 0.0;
+    let mut g = [0.0; 8];
+    for a in 0..4 {
+        let n = (a + 1) % 4;
+        let p = (a + 3) % 4;
+        v += x[a][0] * x[n][1] - x[n][0] * x[a][1];
+        g[2 * a] = 0.5 * (x[n][1] - x[p][1]);
+        g[2 * a + 1] = 0.5 * (x[p][0] - x[n][0]);
+    }
+    (0.5 * v, g)
+}
+
+/// Add `s · H` to `kk`, H = ∂²v/∂x² of the shoelace area (entries ±½).
+fn add_area_hessian(kk: &mut [[f64; 8]; 8], s: f64) {
+    for a in 0..4 {
+        let n = (a + 1) % 4;
+        // ∂²v/∂x_a∂y_n = +½, ∂²v/∂y_a∂x_n = −½
+        kk[2 * a][2 * n + 1] += 0.5 * s;
+        kk[2 * n + 1][2 * a] += 0.5 * s;
+        kk[2 * a + 1][2 * n] -= 0.5 * s;
+        kk[2 * n][2 * a + 1] -= 0.5 * s;
+    }
+}
+
+/// Voigt matrix T with `T τ̂ = (G τ Gᵀ)^` for a 2×2 G, stresses `[11, 22, 12]`; the strain-like
+/// transformation (engineering shear) is Tᵀ.
+fn voigt_congruence(g: &[[f64; 2]; 2]) -> [[f64; 3]; 3] {
+    [
+        [g[0][0] * g[0][0], g[0][1] * g[0][1], 2.0 * g[0][0] * g[0][1]],
+        [g[1][0] * g[1][0], g[1][1] * g[1][1], 2.0 * g[1][0] * g[1][1]],
+        [g[0][0] * g[1][0], g[0][1] * g[1][1], g[0][0] * g[1][1] + g[0][1] * g[1][0]],
+    ]
+}
+
+fn inv2(m: &[[f64; 2]; 2]) -> (f64, [[f64; 2]; 2]) {
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let id = 1.0 / det;
+    (det, [[m[1][1] * id, -m[0][1] * id], [-m[1][0] * id, m[0][0] * id]])
+}
+
+/// Evaluate one element.
+///
+/// - `xx0`: reference nodal coordinates; `uu`: nodal displacements (mm). Kinematics are
+///   formed from the displacements (F = I + ∇₀u, v − V from the shoelace formula of the
+///   differences) so that tiny strains are not lost to round-off in X + u;
+/// - `old`: committed Gauss-point states; `inc`: the time increment;
+/// - `vol`: volumetric treatment; `tangent`: whether to form `kk`.
+///
+/// Errors when an element is inverted at a Gauss point or a local return map fails.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate(
+    formulation: Formulation,
+    law: &dyn ConstitutiveLaw,
+    xx0: &[[f64; 2]; 4],
+    uu: &[[f64; 2]; 4],
+    old: &[MatState; 4],
+    inc: TimeIncrement,
+    vol: Volumetric,
+    tangent: bool,
+    out: &mut ElementOut,
+) -> Result<(), MaterialError> {
+    out.f_int = [0.0; 8];
+    if tangent {
+        out.kk = [[0.0; 8]; 8];
+    }
+
+    // --- volumetric part (mean dilatation) ---
+    // coordinates relative to node 0, so the shoelace sums do not cancel large numbers
+    let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
+    let x: [[f64; 2]; 4] = std::array::from_fn(|a| [xc[a][0] + uu[a][0], xc[a][1] + uu[a][1]]);
+    let (vol0, _) = quad_area_grad(&xc);
+    let (_, g) = quad_area_grad(&x);
+    // v − V = ½ Σ (X_a × u_{a+1} + u_a × X_{a+1} + u_a × u_{a+1})
+    let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
+    let mut dvol = 0.0;
+    for a in 0..4 {
+        let n = (a + 1) % 4;
+        dvol += cross(xc[a], uu[n]) + cross(uu[a], xc[n]) + cross(uu[a], uu[n]);
+    }
+    dvol *= 0.5;
+    let theta = 1.0 + dvol / vol0;
+    if theta <= 0.0 || vol0 <= 0.0 {
+        return Err(MaterialError::InvertedElement(theta));
+    }
+    let ln_t = (dvol / vol0).ln_1p();
+    let p = vol.lambda + vol.kappa * ln_t / theta;
+    let upp = vol.kappa * (1.0 - ln_t) / (theta * theta);
+    for i in 0..8 {
+        out.f_int[i] += p * g[i];
+    }
+    if tangent {
+        let s = upp / vol0;
+        for i in 0..8 {
+            for j in 0..8 {
+                out.kk[i][j] += s * g[i] * g[j];
+            }
+        }
+        add_area_hessian(&mut out.kk, p);
+    }
+    out.pressure = p;
+    out.theta = theta;
+
+    // --- deviatoric part, Gauss loop ---
+    for (q, gp) in GAUSS.iter().enumerate() {
+        let dn = shape_derivs(gp[0], gp[1]);
+        // reference Jacobian J0 = ∂X/∂ξ
+        let mut j0 = [[0.0; 2]; 2];
+        for a in 0..4 {
+            for i in 0..2 {
+                for k in 0..2 {
+                    j0[i][k] += xx0[a][i] * dn[a][k];
+                }
+            }
+        }
+        let (det_j0, j0_inv) = inv2(&j0);
+        if det_j0 <= 0.0 {
+            return Err(MaterialError::InvertedElement(det_j0));
+        }
+        // ∂N_a/∂X = ∂N_a/∂ξ J0⁻¹
+        let mut dn_dx0 = [[0.0; 2]; 4];
+        for a in 0..4 {
+            for k in 0..2 {
+                dn_dx0[a][k] = dn[a][0] * j0_inv[0][k] + dn[a][1] * j0_inv[1][k];
+            }
+        }
+        // F = I + Σ u_a ⊗ ∂N_a/∂X
+        let mut f2 = [[1.0, 0.0], [0.0, 1.0]];
+        for a in 0..4 {
+            for i in 0..2 {
+                for k in 0..2 {
+                    f2[i][k] += uu[a][i] * dn_dx0[a][k];
+                }
+            }
+        }
+        let (jac, f_inv) = inv2(&f2);
+        if jac <= 0.0 {
+            return Err(MaterialError::InvertedElement(jac));
+        }
+        let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
+        let MatResponse { tau, cc, state } = law.update(&ff, &old[q], inc)?;
+        let w0 = det_j0; // Gauss weight 1, unit thickness: dV₀ = det J0
+
+        out.gauss[q] = GaussOut {
+            sig: [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p],
+            state,
+        };
+
+        match formulation {
+            Formulation::TotalLagrangian => {
+                // S = F⁻¹ τ′ F⁻ᵀ, D = T c Tᵀ with T the congruence by F⁻¹
+                let t = voigt_congruence(&f_inv);
+                let tau3 = [tau[0], tau[1], tau[2]];
+                let mut s = [0.0; 3];
+                for i in 0..3 {
+                    for k in 0..3 {
+                        s[i] += t[i][k] * tau3[k];
+                    }
+                }
+                // ₀B_L for node a: rows δE11, δE22, 2δE12; cols (u_a, v_a)
+                let mut bl = [[0.0; 8]; 3];
+                for a in 0..4 {
+                    let (n1, n2) = (dn_dx0[a][0], dn_dx0[a][1]);
+                    bl[0][2 * a] = f2[0][0] * n1;
+                    bl[0][2 * a + 1] = f2[1][0] * n1;
+                    bl[1][2 * a] = f2[0][1] * n2;
+                    bl[1][2 * a + 1] = f2[1][1] * n2;
+                    bl[2][2 * a] = f2[0][0] * n2 + f2[0][1] * n1;
+                    bl[2][2 * a + 1] = f2[1][0] * n2 + f2[1][1] * n1;
+                }
+                for i in 0..8 {
+                    out.f_int[i] += w0 * (bl[0][i] * s[0] + bl[1][i] * s[1] + bl[2][i] * s[2]);
+                }
+                if tangent {
+                    // D = T c Tᵀ
+                    let mut tc = [[0.0; 3]; 3];
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            for k in 0..3 {
+                                tc[i][j] += t[i][k] * cc[k][j];
+                            }
+                        }
+                    }
+                    let mut dd = [[0.0; 3]; 3];
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            for k in 0..3 {
+                                dd[i][j] += tc[i][k] * t[j][k];
+                            }
+                        }
+                    }
+                    add_bt_d_b(&mut out.kk, &bl, &dd, w0);
+                    add_geometric(&mut out.kk, &dn_dx0, &[[s[0], s[2]], [s[2], s[1]]], w0);
+                }
+            }
+            Formulation::UpdatedLagrangian => {
+                // ∂N_a/∂x = ∂N_a/∂X F⁻¹
+                let mut dn_dx = [[0.0; 2]; 4];
+                for a in 0..4 {
+                    for k in 0..2 {
+                        dn_dx[a][k] = dn_dx0[a][0] * f_inv[0][k] + dn_dx0[a][1] * f_inv[1][k];
+                    }
+                }
+                let dv = w0 * jac;
+                let sig = [tau[0] / jac, tau[1] / jac, tau[2] / jac];
+                let mut bl = [[0.0; 8]; 3];
+                for a in 0..4 {
+                    let (n1, n2) = (dn_dx[a][0], dn_dx[a][1]);
+                    bl[0][2 * a] = n1;
+                    bl[1][2 * a + 1] = n2;
+                    bl[2][2 * a] = n2;
+                    bl[2][2 * a + 1] = n1;
+                }
+                for i in 0..8 {
+                    out.f_int[i] += dv * (bl[0][i] * sig[0] + bl[1][i] * sig[1] + bl[2][i] * sig[2]);
+                }
+                if tangent {
+                    // c/J integrated over dv = c integrated over dV₀
+                    add_bt_d_b(&mut out.kk, &bl, &cc, w0);
+                    add_geometric(&mut out.kk, &dn_dx, &[[sig[0], sig[2]], [sig[2], sig[1]]], dv);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// kk += w B_Lᵀ D B_L
+#[inline]
+fn add_bt_d_b(kk: &mut [[f64; 8]; 8], bl: &[[f64; 8]; 3], dd: &[[f64; 3]; 3], w: f64) {
+    let mut db = [[0.0; 8]; 3];
+    for i in 0..3 {
+        for j in 0..8 {
+            db[i][j] = dd[i][0] * bl[0][j] + dd[i][1] * bl[1][j] + dd[i][2] * bl[2][j];
+        }
+    }
+    for i in 0..8 {
+        for j in 0..8 {
+            kk[i][j] += w * (bl[0][i] * db[0][j] + bl[1][i] * db[1][j] + bl[2][i] * db[2][j]);
+        }
+    }
+}
+
+/// kk += w B_NLᵀ [s 0; 0 s] B_NL, i.e. (∇N_a · s ∇N_b) I₂ for each node pair.
+#[inline]
+fn add_geometric(kk: &mut [[f64; 8]; 8], dn: &[[f64; 2]; 4], s: &[[f64; 2]; 2], w: f64) {
+    for a in 0..4 {
+        let sa = [
+            s[0][0] * dn[a][0] + s[0][1] * dn[a][1],
+            s[1][0] * dn[a][0] + s[1][1] * dn[a][1],
+        ];
+        for b in 0..4 {
+            let gab = w * (sa[0] * dn[b][0] + sa[1] * dn[b][1]);
+            kk[2 * a][2 * b] += gab;
+            kk[2 * a + 1][2 * b + 1] += gab;
+        }
+    }
+}

@@ -19,6 +19,8 @@
 
 pub mod analytical;
 pub mod assembly;
+#[doc(hidden)]
+pub mod bench_support;
 pub mod case;
 pub mod element;
 pub mod linalg;

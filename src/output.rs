@@ -1,1 +1,100 @@
-//! (being written)
+//! Run outputs: `history.csv` (one row per converged step, flushed every step so a run that
+//! fails or is killed keeps every row written so far) and `summary.json` (written at the end,
+//! also when the run fails, with the status and the error).
+
+use crate::model::Model;
+use crate::solver::{RunSummary, StepReport};
+use serde::Serialize;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Writes `history.csv` row by row.
+pub struct HistoryWriter {
+    out: BufWriter<File>,
+    pub path: PathBuf,
+}
+
+/// Column names of `history.csv` for a model.
+pub fn history_columns(model: &Model) -> Vec<String> {
+    let mut c: Vec<String> = [
+        "step",
+        "time",
+        "dt",
+        "newton_iterations",
+        "volume_updates",
+        "cutbacks",
+        "residual",
+        "volume_error",
+        "volume_error_max_body",
+        "max_element_volume_change",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for g in &model.reaction_groups {
+        c.push(format!("rx_{}", g.label));
+        c.push(format!("ry_{}", g.label));
+    }
+    for g in &model.displacement_groups {
+        c.push(format!("ux_{}", g.label));
+        c.push(format!("uy_{}", g.label));
+    }
+    c
+}
+
+impl HistoryWriter {
+    pub fn create(dir: &Path, model: &Model) -> std::io::Result<Self> {
+        let path = dir.join("history.csv");
+        let mut out = BufWriter::new(File::create(&path)?);
+        writeln!(out, "{}", history_columns(model).join(","))?;
+        out.flush()?;
+        Ok(Self { out, path })
+    }
+
+    pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
+        write!(
+            self.out,
+            "{},{:.9e},{:.6e},{},{},{},{:.3e},{:.6e},{:.6e},{:.6e}",
+            r.step,
+            r.time,
+            r.dt,
+            r.newton_iterations,
+            r.volume_updates,
+            r.cutbacks,
+            r.residual,
+            r.volume_error,
+            r.volume_error_max_body,
+            r.max_element_volume_change
+        )?;
+        for v in r.reactions.iter().chain(&r.displacements) {
+            write!(self.out, ",{:.9e},{:.9e}", v[0], v[1])?;
+        }
+        writeln!(self.out)?;
+        self.out.flush()
+    }
+}
+
+/// Contents of `summary.json`.
+#[derive(Serialize)]
+pub struct SummaryFile<'a> {
+    pub mpfem_version: &'static str,
+    pub title: &'a str,
+    /// "completed" or "failed".
+    pub status: &'a str,
+    pub error: Option<String>,
+    pub formulation: String,
+    pub n_bodies: usize,
+    pub n_nodes: usize,
+    pub n_elements: usize,
+    pub wall_time_s: f64,
+    pub run: Option<&'a RunSummary>,
+    pub last_step: Option<&'a StepReport>,
+}
+
+pub fn write_summary(dir: &Path, s: &SummaryFile) -> std::io::Result<PathBuf> {
+    let path = dir.join("summary.json");
+    let text = serde_json::to_string_pretty(s).map_err(std::io::Error::other)?;
+    std::fs::write(&path, text + "\n")?;
+    Ok(path)
+}

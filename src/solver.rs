@@ -1,1 +1,616 @@
-//! (being written)
+//! Time stepping and the nonlinear solution: full or modified Newton–Raphson (the paper's
+//! eq. 9 / 16), backtracking line search, residual and energy convergence tests, adaptive time
+//! steps with cut-back and growth, and the augmented-Lagrangian (Uzawa) loop that enforces
+//! incompressibility element by element for ν = 0.5.
+//!
+//! Lifecycle of a step t_n → t_{n+1} = t_n + Δt:
+//! 1. prescribed displacements and loads are evaluated at t_{n+1}; free displacements are
+//!    predicted by extrapolating the last converged increment;
+//! 2. Newton iterations `K Δu = F_ext − F_int` until ‖R‖ ≤ tol_R · reference force and
+//!    |Δu·R| ≤ tol_E · |Δu₀·R₀|; material states are evaluated from the committed ones and never
+//!    changed inside the iterations;
+//! 3. for incompressible bodies the multipliers are updated (λ_e ← p_e) and step 2 repeats
+//!    until max |Θ_e − 1| ≤ `volume_tol`;
+//! 4. on success the states are committed and the step may grow; on failure (no convergence,
+//!    inverted element, failed return map, failed linear solve) everything of the step is
+//!    discarded and it is retried with Δt · cutback, down to `dt_min`.
+
+use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
+use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
+use crate::element::Volumetric;
+use crate::linalg::{make_solver, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
+use crate::material::{ConstitutiveLaw, TimeIncrement};
+use crate::model::Model;
+use serde::Serialize;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Why one Newton solve failed (drives the cut-back).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum NewtonFailure {
+    #[error("no convergence in {iterations} iterations (residual history {residuals:?})")]
+    NotConverged { iterations: usize, residuals: Vec<f64> },
+    #[error("diverged at iteration {iteration} (residual history {residuals:?})")]
+    Diverged { iteration: usize, residuals: Vec<f64> },
+    #[error("{0}")]
+    Element(#[from] AssemblyError),
+    #[error("linear solver: {0}")]
+    Linear(String),
+}
+
+/// A run that could not go on.
+#[derive(Debug, Error)]
+pub enum SolveError {
+    #[error("step from t = {time:.6e} s failed with dt = {dt:.3e} s (below dt_min = {dt_min:.3e} s): {cause}")]
+    StepFailed { time: f64, dt: f64, dt_min: f64, cause: NewtonFailure },
+    #[error("maximum number of steps ({0}) reached before the end time")]
+    TooManySteps(usize),
+    #[error("linear solver setup: {0}")]
+    Linear(#[from] LinalgError),
+}
+
+/// One converged step, as reported to observers and written to the history.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepReport {
+    pub step: usize,
+    pub time: f64,
+    pub dt: f64,
+    /// Newton iterations of this step (all augmented-Lagrangian rounds together).
+    pub newton_iterations: usize,
+    /// Augmented-Lagrangian multiplier updates of this step.
+    pub volume_updates: usize,
+    pub cutbacks: usize,
+    /// Final residual norm relative to the reference force.
+    pub residual: f64,
+    /// |A(t) − A(0)| / A(0) over all bodies.
+    pub volume_error: f64,
+    /// Largest per-body |A(t) − A(0)| / A(0).
+    pub volume_error_max_body: f64,
+    /// Largest element |Θ − 1| over incompressible bodies (0 if none).
+    pub max_element_volume_change: f64,
+    /// Reaction force (N/mm) on each reaction group of the model.
+    pub reactions: Vec<[f64; 2]>,
+    /// Mean displacement (mm) of each displacement group of the model.
+    pub displacements: Vec<[f64; 2]>,
+}
+
+/// What a finished run reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunSummary {
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub cutbacks: usize,
+    pub final_time: f64,
+    pub wall_time_s: f64,
+    pub linear_solver: String,
+    pub n_dofs: usize,
+    pub n_free: usize,
+    pub n_elements: usize,
+    pub last: Option<StepReport>,
+}
+
+/// The converged solution at the end of the last committed step.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    pub time: f64,
+    /// Nodal displacements (mm), dof `2 n + c`.
+    pub u: Vec<f64>,
+    pub fields: ElementFields,
+    /// Augmented-Lagrangian multipliers per element (MPa).
+    pub lambda: Vec<f64>,
+}
+
+/// A converged but uncommitted step.
+struct Trial {
+    u: Vec<f64>,
+    lambda: Vec<f64>,
+    worst: f64,
+    iterations: usize,
+    updates: usize,
+    residual: f64,
+}
+
+/// The simulation driver: owns the model, the solution and the solver workspaces.
+pub struct Simulation {
+    pub model: Model,
+    pub time: TimeSpec,
+    pub spec: SolverSpec,
+    pub sol: Solution,
+    assembler: Assembler,
+    kk: CsrMatrix,
+    linear: Box<dyn LinearSolver>,
+    linear_name: String,
+    pool: Option<rayon::ThreadPool>,
+    /// Volumetric data per element (κ and whether it is an incompressible body).
+    kappa: Vec<f64>,
+    incompressible: Vec<bool>,
+    area0_body: Vec<f64>,
+    area0_total: f64,
+    force_floor: f64,
+    // work buffers
+    trial_fields: ElementFields,
+    f_int: Vec<f64>,
+    f_ext: Vec<f64>,
+    r: Vec<f64>,
+    du: Vec<f64>,
+    u_prev: Vec<f64>,
+    dt_prev: f64,
+    step: usize,
+    total_iterations: usize,
+    total_cutbacks: usize,
+}
+
+impl Simulation {
+    /// Build the driver. `threads` = 0 uses every core; 1 assembles sequentially.
+    pub fn new(model: Model, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
+        let n_dofs = model.n_dofs();
+        let (eq, n_free) = number_equations(n_dofs, model.prescribed.iter().map(|p| p.dof));
+        let (assembler, kk) = Assembler::new(&model, eq, n_free);
+        let kind = match spec.linear {
+            LinearChoice::Fixed(k) => k,
+            LinearChoice::Auto => {
+                if model.symmetric_tangent() {
+                    LinearSolverKind::Cholesky
+                } else {
+                    LinearSolverKind::Lu
+                }
+            }
+        };
+        let threads = if spec.threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        } else {
+            spec.threads
+        };
+        let pool = if threads > 1 {
+            Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| LinalgError::Other(format!("cannot start {threads} threads: {e}")))?,
+            )
+        } else {
+            None
+        };
+        let opts = SolverOptions {
+            kind,
+            preconditioner: spec.preconditioner,
+            pcg_tol: spec.pcg_tol,
+            pcg_max_iterations: spec.pcg_max_iterations,
+            threads,
+        };
+        let mut linear = make_solver(&opts);
+        if n_free > 0 {
+            linear.analyze(&kk)?;
+        }
+        let linear_name = linear.name().to_string();
+        let ne = model.elements.len();
+        let mut kappa = vec![0.0; ne];
+        let mut incompressible = vec![false; ne];
+        let mut g_max: f64 = 0.0;
+        for e in 0..ne {
+            let m = &model.materials[model.elem_material[e]];
+            g_max = g_max.max(m.shear_modulus());
+            match m.bulk_modulus() {
+                Some(k) => kappa[e] = k,
+                None => {
+                    kappa[e] = spec.incompressible_penalty * m.shear_modulus();
+                    incompressible[e] = true;
+                }
+            }
+        }
+        let area0_body = model.body_areas(&model.x0);
+        let area0_total: f64 = area0_body.iter().sum();
+        // forces below this are round-off: G · L · 1e-13 with L = √(total area)
+        let force_floor = 1e-13 * g_max * area0_total.abs().sqrt();
+        let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne] };
+        Ok(Self {
+            trial_fields: ElementFields::new(ne),
+            f_int: vec![0.0; n_dofs],
+            f_ext: vec![0.0; n_dofs],
+            r: vec![0.0; n_free],
+            du: vec![0.0; n_free],
+            u_prev: vec![0.0; n_dofs],
+            dt_prev: 0.0,
+            model,
+            time,
+            spec,
+            sol,
+            assembler,
+            kk,
+            linear,
+            linear_name,
+            pool,
+            kappa,
+            incompressible,
+            area0_body,
+            area0_total,
+            force_floor,
+            step: 0,
+            total_iterations: 0,
+            total_cutbacks: 0,
+        })
+    }
+
+    pub fn n_free(&self) -> usize {
+        self.assembler.n_free
+    }
+
+    pub fn linear_solver_name(&self) -> &str {
+        &self.linear_name
+    }
+
+    /// Current nodal coordinates x = X + u.
+    pub fn coords(&self, u: &[f64]) -> Vec<[f64; 2]> {
+        self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + u[2 * n], p[1] + u[2 * n + 1]]).collect()
+    }
+
+    /// Run from the current time to the end time, calling `observer` after every converged
+    /// step. On error the last committed solution stays in `self.sol`.
+    pub fn run(&mut self, observer: &mut dyn FnMut(&Simulation, &StepReport)) -> Result<RunSummary, SolveError> {
+        let start = Instant::now();
+        let t_end = self.time.end;
+        let mut dt = self.time.dt.min(self.time.dt_max);
+        let mut last = None;
+        while self.sol.time < t_end * (1.0 - 1e-12) {
+            if self.step >= self.time.max_steps {
+                return Err(SolveError::TooManySteps(self.time.max_steps));
+            }
+            let remaining = t_end - self.sol.time;
+            let dt_try = if remaining <= dt * 1.01 { remaining } else { dt };
+            let report = self.advance(dt_try)?;
+            dt = if report.cutbacks == 0 && report.newton_iterations <= self.time.easy_iterations {
+                (report.dt * self.time.growth).min(self.time.dt_max)
+            } else {
+                report.dt
+            };
+            observer(self, &report);
+            last = Some(report);
+        }
+        Ok(RunSummary {
+            steps: self.step,
+            newton_iterations: self.total_iterations,
+            cutbacks: self.total_cutbacks,
+            final_time: self.sol.time,
+            wall_time_s: start.elapsed().as_secs_f64(),
+            linear_solver: self.linear_name.clone(),
+            n_dofs: self.model.n_dofs(),
+            n_free: self.assembler.n_free,
+            n_elements: self.model.elements.len(),
+            last,
+        })
+    }
+
+    /// One converged step of size `dt`, or smaller after cut-backs (the report says which).
+    pub fn advance(&mut self, dt: f64) -> Result<StepReport, SolveError> {
+        let mut dt_try = dt;
+        let mut cutbacks = 0;
+        loop {
+            match self.try_step(dt_try) {
+                Ok(trial) => return Ok(self.commit(dt_try, trial, cutbacks)),
+                Err(cause) => {
+                    cutbacks += 1;
+                    self.total_cutbacks += 1;
+                    let next = dt_try * self.time.cutback;
+                    tracing::warn!(time = self.sol.time, dt = dt_try, next, %cause, "step failed, cutting back");
+                    if next < self.time.dt_min {
+                        return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause });
+                    }
+                    dt_try = next;
+                }
+            }
+        }
+    }
+
+    /// Reaction on node `n` after the last converged step: F_int − F_ext (N/mm).
+    pub fn nodal_reaction(&self, n: usize) -> [f64; 2] {
+        [self.f_int[2 * n] - self.f_ext[2 * n], self.f_int[2 * n + 1] - self.f_ext[2 * n + 1]]
+    }
+
+    /// External force vector at time t on configuration `x` (all dofs), and, when `kk` is
+    /// given, subtract its derivative (follower pressure) from the tangent.
+    fn external_forces(&mut self, t: f64, x: &[[f64; 2]], with_tangent: bool) {
+        let f = &mut self.f_ext;
+        f.iter_mut().for_each(|v| *v = 0.0);
+        for load in &self.model.loads {
+            let amp = self.model.amplitudes[load.amplitude].at(t, self.model.t_end);
+            for e in &load.edges {
+                let (a, b) = (e[0], e[1]);
+                match &load.kind {
+                    LoadKind::Traction(tr) | LoadKind::Force(tr) => {
+                        let scale = if matches!(load.kind, LoadKind::Force(_)) { 1.0 / load.length0 } else { 1.0 };
+                        let (pa, pb) = (self.model.x0[a], self.model.x0[b]);
+                        let len = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2)).sqrt();
+                        for c in 0..2 {
+                            let v = 0.5 * amp * scale * tr[c] * len;
+                            f[2 * a + c] += v;
+                            f[2 * b + c] += v;
+                        }
+                    }
+                    LoadKind::Pressure(p) => {
+                        // force on each node: −p/2 · (outward normal × length) = −p/2 (Δy, −Δx)
+                        let p = p * amp;
+                        let (xa, xb) = (x[a], x[b]);
+                        let fx = -0.5 * p * (xb[1] - xa[1]);
+                        let fy = 0.5 * p * (xb[0] - xa[0]);
+                        for n in [a, b] {
+                            f[2 * n] += fx;
+                            f[2 * n + 1] += fy;
+                        }
+                        if with_tangent {
+                            // K −= ∂f_ext/∂x:  ∂fx/∂y_b = −p/2, ∂fx/∂y_a = p/2, ∂fy/∂x_b = p/2, ∂fy/∂x_a = −p/2
+                            let eq = &self.assembler.eq;
+                            for n in [a, b] {
+                                for (row, col, d) in [
+                                    (2 * n, 2 * b + 1, -0.5 * p),
+                                    (2 * n, 2 * a + 1, 0.5 * p),
+                                    (2 * n + 1, 2 * b, 0.5 * p),
+                                    (2 * n + 1, 2 * a, -0.5 * p),
+                                ] {
+                                    if eq[row] != FIXED && eq[col] != FIXED {
+                                        if let Some(k) = self.kk.find(eq[row], eq[col]) {
+                                            self.kk.values[k] -= d;
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn volumetric(&self, lambda: &[f64]) -> Vec<Volumetric> {
+        self.kappa.iter().zip(lambda).map(|(&kappa, &lambda)| Volumetric { kappa, lambda }).collect()
+    }
+
+    /// Assemble at displacement `u`: fills `f_int`, `f_ext`, the free residual `r` and (if
+    /// asked) the tangent. Returns ‖r‖.
+    fn evaluate(&mut self, u: &[f64], inc: TimeIncrement, vol: &[Volumetric], tangent: bool) -> Result<f64, AssemblyError> {
+        let x = self.coords(u);
+        let kk = if tangent { Some(&mut self.kk) } else { None };
+        self.assembler.assemble(
+            &self.model,
+            u,
+            &self.sol.fields.states,
+            vol,
+            inc,
+            kk,
+            &mut self.f_int,
+            &mut self.trial_fields,
+            self.pool.as_ref(),
+        )?;
+        self.external_forces(inc.time, &x, tangent);
+        let mut norm2 = 0.0;
+        for (d, &q) in self.assembler.eq.iter().enumerate() {
+            if q != FIXED {
+                let v = self.f_ext[d] - self.f_int[d];
+                self.r[q] = v;
+                norm2 += v * v;
+            }
+        }
+        Ok(norm2.sqrt())
+    }
+
+    /// Reference force for the relative residual: the larger of ‖F_ext‖ and ‖F_int‖ over all
+    /// dofs (which includes the reactions), never below round-off.
+    fn reference_force(&self) -> f64 {
+        let n = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        n(&self.f_ext).max(n(&self.f_int)).max(self.force_floor)
+    }
+
+    fn factor(&mut self) -> Result<(), NewtonFailure> {
+        self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()))
+    }
+
+    /// Attempt one step of size dt from the committed solution. On success the trial
+    /// displacement is in `self.sol.u` (not yet committed) — see `commit`.
+    fn try_step(&mut self, dt: f64) -> Result<Trial, NewtonFailure> {
+        let t = self.sol.time + dt;
+        let inc = TimeIncrement { time: t, dt };
+        // prediction
+        let mut u = self.sol.u.clone();
+        if self.dt_prev > 0.0 {
+            let s = dt / self.dt_prev;
+            for (d, &q) in self.assembler.eq.iter().enumerate() {
+                if q != FIXED {
+                    u[d] += s * (self.sol.u[d] - self.u_prev[d]);
+                }
+            }
+        }
+        for p in &self.model.prescribed {
+            u[p.dof] = p.value * self.model.amplitude(p.amplitude, t);
+        }
+        let mut lambda = self.sol.lambda.clone();
+        let mut iterations = 0;
+        let mut updates = 0;
+        let mut first = true;
+        loop {
+            let vol = self.volumetric(&lambda);
+            let (its, res) = match self.newton(&mut u, inc, &vol) {
+                Ok(v) => v,
+                Err(NewtonFailure::Element(e)) if first && self.dt_prev > 0.0 => {
+                    // the extrapolated guess inverted an element: restart from the last solution
+                    tracing::debug!(%e, "prediction rejected");
+                    first = false;
+                    u.copy_from_slice(&self.sol.u);
+                    for p in &self.model.prescribed {
+                        u[p.dof] = p.value * self.model.amplitude(p.amplitude, t);
+                    }
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            first = false;
+            iterations += its;
+            // augmented Lagrangian on the element area of incompressible bodies
+            let mut worst: f64 = 0.0;
+            for e in 0..self.incompressible.len() {
+                if self.incompressible[e] {
+                    worst = worst.max((self.trial_fields.theta[e] - 1.0).abs());
+                }
+            }
+            if worst <= self.spec.volume_tol || updates >= self.spec.max_volume_updates {
+                if worst > self.spec.volume_tol {
+                    tracing::warn!(worst, tol = self.spec.volume_tol, "volume constraint not met after the allowed updates");
+                }
+                return Ok(Trial { u, lambda, worst, iterations, updates, residual: res });
+            }
+            for e in 0..self.incompressible.len() {
+                if self.incompressible[e] {
+                    lambda[e] = self.trial_fields.pressure[e];
+                }
+            }
+            updates += 1;
+        }
+    }
+
+    /// Newton–Raphson at fixed multipliers. Returns (iterations, final relative residual).
+    fn newton(&mut self, u: &mut [f64], inc: TimeIncrement, vol: &[Volumetric]) -> Result<(usize, f64), NewtonFailure> {
+        let full = matches!(self.spec.newton, NewtonKind::Full);
+        let n_free = self.assembler.n_free;
+        let mut residuals = Vec::new();
+        let mut rnorm = self.evaluate(u, inc, vol, true)?;
+        if n_free == 0 {
+            return Ok((0, 0.0));
+        }
+        self.factor()?;
+        let mut e0 = 0.0;
+        let mut e_last = f64::INFINITY;
+        let mut du_full = vec![0.0; u.len()];
+        for k in 0..=self.spec.max_iterations {
+            let reference = self.reference_force();
+            let rel = rnorm / reference;
+            residuals.push(rel);
+            tracing::debug!(iteration = k, residual = rel, energy = e_last, "newton");
+            if !rnorm.is_finite() || (k > 2 && rel > 1e8 * residuals[0].max(1e-300)) {
+                return Err(NewtonFailure::Diverged { iteration: k, residuals });
+            }
+            let residual_ok = rnorm <= self.spec.residual_tol * reference || rnorm <= self.force_floor;
+            let energy_ok = k > 0 && e_last <= self.spec.energy_tol * e0;
+            // the energy test is relative to the first iteration of this solve, which is
+            // itself at round-off when a step starts almost in equilibrium: a residual a
+            // hundred times below its tolerance is then accepted on its own
+            // (or once the residual, already within its tolerance, stops decreasing: the
+            // round-off floor of the assembly has been reached)
+            let tiny = rel <= 0.01 * self.spec.residual_tol || rnorm <= self.force_floor;
+            let floor_reached = k >= 1 && rel >= 0.5 * residuals[k - 1];
+            if residual_ok && (k == 0 || energy_ok || tiny || floor_reached) {
+                return Ok((k, rel));
+            }
+            if k == self.spec.max_iterations {
+                break;
+            }
+            // solve K Δu = R
+            self.du.iter_mut().for_each(|v| *v = 0.0);
+            self.linear
+                .solve(&self.kk, &self.r, &mut self.du)
+                .map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+            let energy = self.du.iter().zip(&self.r).map(|(a, b)| a * b).sum::<f64>().abs();
+            if k == 0 {
+                e0 = energy.max(f64::MIN_POSITIVE);
+            }
+            e_last = energy;
+            for (d, &q) in self.assembler.eq.iter().enumerate() {
+                du_full[d] = if q != FIXED { self.du[q] } else { 0.0 };
+            }
+            // line search: backtrack while the residual grows or an element fails
+            let u0: Vec<f64> = u.to_vec();
+            let mut eta = 1.0;
+            let r_old = rnorm;
+            let mut accepted = false;
+            for _ in 0..6 {
+                for d in 0..u.len() {
+                    u[d] = u0[d] + eta * du_full[d];
+                }
+                match self.evaluate(u, inc, vol, full) {
+                    Ok(rn) => {
+                        // accept when the residual norm or the energy |Δu·R(η)| decreased
+                        let s: f64 = self.du.iter().zip(&self.r).map(|(a, b)| a * b).sum::<f64>().abs();
+                        let better = rn.is_finite() && (rn < r_old || s < 0.9 * energy);
+                        if !self.spec.line_search || better || eta < 0.06 {
+                            rnorm = rn;
+                            accepted = rn.is_finite();
+                            break;
+                        }
+                        eta *= 0.5;
+                    }
+                    Err(e) if eta < 0.06 => return Err(e.into()),
+                    Err(_) => eta *= 0.5,
+                }
+            }
+            if !accepted {
+                // keep the smallest step tried; its residual drives the next iteration
+                rnorm = self.evaluate(u, inc, vol, full)?;
+            }
+            if full {
+                self.factor()?;
+            }
+        }
+        Err(NewtonFailure::NotConverged { iterations: self.spec.max_iterations, residuals })
+    }
+
+    /// Commit a converged step: states, displacements, multipliers, time; build its report.
+    fn commit(&mut self, dt: f64, trial: Trial, cutbacks: usize) -> StepReport {
+        self.u_prev.copy_from_slice(&self.sol.u);
+        self.sol.u = trial.u;
+        self.sol.lambda = trial.lambda;
+        std::mem::swap(&mut self.sol.fields, &mut self.trial_fields);
+        self.sol.time += dt;
+        self.dt_prev = dt;
+        self.step += 1;
+        self.total_iterations += trial.iterations;
+        let x = self.coords(&self.sol.u);
+        let areas = self.model.body_areas(&x);
+        let total: f64 = areas.iter().sum();
+        let volume_error = ((total - self.area0_total) / self.area0_total).abs();
+        let volume_error_max_body = areas
+            .iter()
+            .zip(&self.area0_body)
+            .map(|(a, a0)| ((a - a0) / a0).abs())
+            .fold(0.0, f64::max);
+        let reactions = self
+            .model
+            .reaction_groups
+            .iter()
+            .map(|g| {
+                let mut r = [0.0; 2];
+                for &n in &g.nodes {
+                    for c in 0..2 {
+                        r[c] += self.f_int[2 * n + c] - self.f_ext[2 * n + c];
+                    }
+                }
+                r
+            })
+            .collect();
+        let displacements = self
+            .model
+            .displacement_groups
+            .iter()
+            .map(|g| {
+                let mut m = [0.0; 2];
+                for &n in &g.nodes {
+                    for c in 0..2 {
+                        m[c] += self.sol.u[2 * n + c];
+                    }
+                }
+                let k = g.nodes.len().max(1) as f64;
+                [m[0] / k, m[1] / k]
+            })
+            .collect();
+        StepReport {
+            step: self.step,
+            time: self.sol.time,
+            dt,
+            newton_iterations: trial.iterations,
+            volume_updates: trial.updates,
+            cutbacks,
+            residual: trial.residual,
+            volume_error,
+            volume_error_max_body,
+            max_element_volume_change: trial.worst,
+            reactions,
+            displacements,
+        }
+    }
+}

@@ -1,1 +1,6 @@
 //! Closed-form reference solutions, one file per source.
+
+pub mod cook;
+pub mod hill;
+pub mod creep;
+pub mod j2;

@@ -70,3 +70,116 @@ impl CsrMatrix {
             .collect()
     }
 }
+
+impl CsrMatrix {
+    /// Check the structural invariants solvers rely on: `row_ptr` has `nrows + 1`
+    /// non-decreasing entries starting at 0 and ending at `nnz`, `values` has `nnz` entries, and
+    /// column indices are `< ncols` and strictly increasing within each row.
+    pub fn check_structure(&self) -> Result<(), String> {
+        if self.row_ptr.len() != self.nrows + 1 {
+            return Err(format!(
+                "row_ptr has {} entries, expected nrows + 1 = {}",
+                self.row_ptr.len(),
+                self.nrows + 1
+            ));
+        }
+        if self.row_ptr[0] != 0 || self.row_ptr[self.nrows] != self.col_idx.len() {
+            return Err(format!(
+                "row_ptr must start at 0 and end at nnz = {} (got {} .. {})",
+                self.col_idx.len(),
+                self.row_ptr[0],
+                self.row_ptr[self.nrows]
+            ));
+        }
+        if self.values.len() != self.col_idx.len() {
+            return Err(format!(
+                "values has {} entries but the pattern has {}",
+                self.values.len(),
+                self.col_idx.len()
+            ));
+        }
+        for i in 0..self.nrows {
+            let (s, e) = (self.row_ptr[i], self.row_ptr[i + 1]);
+            if s > e {
+                return Err(format!("row_ptr decreases at row {i}"));
+            }
+            let cols = &self.col_idx[s..e];
+            if let Some(&last) = cols.last() {
+                if last >= self.ncols {
+                    return Err(format!("row {i} has column index {last} >= ncols = {}", self.ncols));
+                }
+            }
+            if cols.windows(2).any(|w| w[0] >= w[1]) {
+                return Err(format!("column indices of row {i} are not strictly increasing"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Position of the diagonal entry of every row (`None` where the pattern has no diagonal).
+    pub fn diagonal_positions(&self) -> Vec<Option<usize>> {
+        (0..self.nrows.min(self.ncols)).map(|i| self.find(i, i)).collect()
+    }
+
+    /// ‖b − A x‖₂, using `r` (length `nrows`) as workspace; on return `r = b − A x`.
+    pub fn residual_into(&self, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
+        self.mul_vec(x, r);
+        let mut s = 0.0;
+        for (ri, bi) in r.iter_mut().zip(b) {
+            *ri = bi - *ri;
+            s += *ri * *ri;
+        }
+        s.sqrt()
+    }
+}
+
+/// What a solver remembers about the sparsity pattern it analysed, to tell whether a matrix
+/// handed to `factor` still has that pattern.
+///
+/// Matrices built by [`CsrMatrix::from_rows`] carry a unique non-zero `pattern_id`, which is
+/// trusted. A `pattern_id` of 0 (e.g. a hand-made or `Default` matrix) means "unknown": the stamp
+/// then keeps a copy of the pattern and compares it entry by entry.
+#[derive(Clone, Debug, Default)]
+pub struct PatternStamp {
+    valid: bool,
+    id: u64,
+    nrows: usize,
+    ncols: usize,
+    nnz: usize,
+    copy: Option<(Vec<usize>, Vec<usize>)>,
+}
+
+impl PatternStamp {
+    /// Stamp of the pattern of `a`.
+    pub fn of(a: &CsrMatrix) -> Self {
+        Self {
+            valid: true,
+            id: a.pattern_id,
+            nrows: a.nrows,
+            ncols: a.ncols,
+            nnz: a.nnz(),
+            copy: (a.pattern_id == 0).then(|| (a.row_ptr.clone(), a.col_idx.clone())),
+        }
+    }
+
+    /// Whether `a` has the stamped pattern.
+    pub fn matches(&self, a: &CsrMatrix) -> bool {
+        if !self.valid
+            || self.id != a.pattern_id
+            || self.nrows != a.nrows
+            || self.ncols != a.ncols
+            || self.nnz != a.nnz()
+        {
+            return false;
+        }
+        match &self.copy {
+            None => true,
+            Some((rp, ci)) => *rp == a.row_ptr && *ci == a.col_idx,
+        }
+    }
+
+    /// Forget the stamped pattern (the next `matches` is false).
+    pub fn clear(&mut self) {
+        *self = Self::default();
+    }
+}

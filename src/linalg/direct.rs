@@ -1,18 +1,673 @@
-//! faer sparse direct solvers. (stub: being written)
+//! faer sparse direct solvers: LU with partial pivoting ([`FaerLu`]) and Cholesky
+//! ([`FaerCholesky`]: LLᵀ, falling back to a Bunch–Kaufman LBLᵀ or an LDLᵀ factorisation on the
+//! same symbolic structure when the matrix is not positive definite).
+//!
+//! Both keep their symbolic factorisation (fill-reducing ordering, elimination tree, supernodes)
+//! and all numeric storage and scratch memory between calls: `factor` only refills values and
+//! runs the numeric factorisation, as long as the pattern is unchanged
+//! ([`CsrMatrix::pattern_id`]). A changed pattern triggers a new analysis automatically.
+//!
+//! Every `solve` checks its answer: it computes the relative residual ‖b − Ax‖/‖b‖, applies up
+//! to [`Refinement::max_steps`] steps of iterative refinement when the residual is above
+//! [`Refinement::target`], and reports [`LinalgError::Singular`] when the solution is not finite
+//! or the residual stays above [`Refinement::singular_tol`].
+
+use super::csr::PatternStamp;
 use super::*;
-pub struct FaerLu;
-impl FaerLu { pub fn new(_threads: usize) -> Self { FaerLu } }
-impl LinearSolver for FaerLu {
-    fn analyze(&mut self, _a: &CsrMatrix) -> Result<(), LinalgError> { unimplemented!() }
-    fn factor(&mut self, _a: &CsrMatrix) -> Result<(), LinalgError> { unimplemented!() }
-    fn solve(&mut self, _a: &CsrMatrix, _b: &[f64], _x: &mut [f64]) -> Result<SolveStats, LinalgError> { unimplemented!() }
-    fn name(&self) -> &'static str { "lu" }
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::solvers::Solve;
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef,
+    SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu, SymbolicLu};
+use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
+use faer::sparse::linalg::{LuError, SupernodalThreshold};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+
+/// faer parallelism for a thread count (0 or 1 → sequential).
+pub fn faer_par(threads: usize) -> Par {
+    if threads > 1 {
+        Par::rayon(threads)
+    } else {
+        Par::Seq
+    }
 }
-pub struct FaerCholesky;
-impl FaerCholesky { pub fn new(_threads: usize) -> Self { FaerCholesky } }
+
+/// Which numeric kernel family faer uses. `Auto` lets faer decide from the estimated flop
+/// count of the factorisation (its default); the others force a choice (benchmarks, tests).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FactorStructure {
+    #[default]
+    Auto,
+    Simplicial,
+    Supernodal,
+}
+
+impl FactorStructure {
+    fn threshold(self) -> SupernodalThreshold {
+        match self {
+            FactorStructure::Auto => SupernodalThreshold::AUTO,
+            FactorStructure::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+            FactorStructure::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+        }
+    }
+}
+
+/// Post-solve accuracy control of the direct solvers.
+#[derive(Clone, Copy, Debug)]
+pub struct Refinement {
+    /// Maximum number of iterative-refinement steps per solve (0 disables refinement).
+    pub max_steps: usize,
+    /// Refine while the relative residual ‖b − Ax‖/‖b‖ is above this.
+    pub target: f64,
+    /// After refinement, a relative residual above this is reported as
+    /// [`LinalgError::Singular`] (numerically singular or hopelessly ill-conditioned matrix).
+    /// `f64::INFINITY` disables the check (non-finite solutions are still reported).
+    pub singular_tol: f64,
+}
+
+impl Default for Refinement {
+    fn default() -> Self {
+        Self { max_steps: 2, target: 1e-12, singular_tol: 1e-6 }
+    }
+}
+
+/// Convert a CSR matrix to an owned faer CSC matrix (same values, same pattern).
+pub fn to_faer_csc(a: &CsrMatrix) -> SparseColMat<usize, f64> {
+    let mut col_ptr = Vec::new();
+    let mut row_idx = Vec::new();
+    let mut pos = Vec::new();
+    csr_to_csc_pattern(a, &mut col_ptr, &mut row_idx, &mut pos);
+    let values = pos.iter().map(|&k| a.values[k]).collect();
+    let sym = SymbolicSparseColMat::new_checked(a.nrows, a.ncols, col_ptr, None, row_idx);
+    SparseColMat::new(sym, values)
+}
+
+/// Solve `A x = b` with the plainest faer calls: CSR → CSC conversion, then
+/// `SparseColMat::sp_lu` (symbolic + numeric) and `Solve::solve_in_place`, all with faer's global
+/// parallelism setting. Reference for benchmarks. Panics if faer reports an error.
+pub fn bare_faer_lu_solve(a: &CsrMatrix, b: &[f64]) -> Vec<f64> {
+    let csc = to_faer_csc(a);
+    let lu = csc.sp_lu().expect("faer sparse LU failed");
+    let mut x = b.to_vec();
+    let n = x.len();
+    lu.solve_in_place(MatMut::from_column_major_slice_mut(&mut x, n, 1));
+    x
+}
+
+/// Solve `A x = b` (A symmetric positive definite) with the plainest faer calls:
+/// `SparseColMat::sp_cholesky(Side::Lower)` on the CSC form and `Solve::solve_in_place`, with
+/// faer's global parallelism setting. Reference for benchmarks. Panics if faer reports an error.
+pub fn bare_faer_cholesky_solve(a: &CsrMatrix, b: &[f64]) -> Vec<f64> {
+    let csc = to_faer_csc(a);
+    let llt = csc.sp_cholesky(Side::Lower).expect("faer sparse Cholesky failed");
+    let mut x = b.to_vec();
+    let n = x.len();
+    llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut x, n, 1));
+    x
+}
+
+/// CSC pattern of `a` plus, for each CSC entry, its position in `a.values`. Row indices come out
+/// sorted within each column. Reuses the vectors' capacity.
+fn csr_to_csc_pattern(a: &CsrMatrix, col_ptr: &mut Vec<usize>, row_idx: &mut Vec<usize>, pos: &mut Vec<usize>) {
+    let nnz = a.nnz();
+    col_ptr.clear();
+    col_ptr.resize(a.ncols + 1, 0);
+    for &j in &a.col_idx {
+        col_ptr[j + 1] += 1;
+    }
+    for j in 0..a.ncols {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    row_idx.clear();
+    row_idx.resize(nnz, 0);
+    pos.clear();
+    pos.resize(nnz, 0);
+    // `next[j]` = next free slot of column j (allocated once per pattern).
+    let mut next: Vec<usize> = col_ptr[..a.ncols].to_vec();
+    for i in 0..a.nrows {
+        for k in a.row_ptr[i]..a.row_ptr[i + 1] {
+            let j = a.col_idx[k];
+            let slot = next[j];
+            next[j] += 1;
+            row_idx[slot] = i;
+            pos[slot] = k;
+        }
+    }
+}
+
+fn check_square(a: &CsrMatrix) -> Result<(), LinalgError> {
+    if a.nrows != a.ncols {
+        return Err(LinalgError::Other(format!("matrix is {}×{}, expected square", a.nrows, a.ncols)));
+    }
+    a.check_structure().map_err(|e| LinalgError::Other(format!("invalid CSR matrix: {e}")))
+}
+
+fn check_vectors(n: usize, b: &[f64], x: &[f64]) -> Result<(), LinalgError> {
+    if b.len() != n || x.len() != n {
+        return Err(LinalgError::Other(format!(
+            "vector lengths b = {}, x = {} do not match the matrix dimension {n}",
+            b.len(),
+            x.len()
+        )));
+    }
+    Ok(())
+}
+
+fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Solve with a factorisation (`solve_in_place` overwrites its argument with A⁻¹·arg), then check
+/// and refine. `r` and `d` are work vectors of length n.
+#[allow(clippy::too_many_arguments)]
+fn solve_checked(
+    a: &CsrMatrix,
+    b: &[f64],
+    x: &mut [f64],
+    r: &mut [f64],
+    d: &mut [f64],
+    cfg: &Refinement,
+    refinements: &mut usize,
+    mut solve_in_place: impl FnMut(&mut [f64]),
+) -> Result<SolveStats, LinalgError> {
+    *refinements = 0;
+    let bnorm = norm2(b);
+    if bnorm == 0.0 {
+        x.fill(0.0);
+        return Ok(SolveStats { iterations: 1, relative_residual: 0.0 });
+    }
+    if !bnorm.is_finite() {
+        return Err(LinalgError::Other("right-hand side is not finite".into()));
+    }
+    x.copy_from_slice(b);
+    solve_in_place(x);
+    if !x.iter().all(|v| v.is_finite()) {
+        return Err(LinalgError::Singular(
+            "the factorisation produced a non-finite solution (zero pivot: matrix numerically singular)".into(),
+        ));
+    }
+    let mut rel = a.residual_into(x, b, r) / bnorm;
+    while rel > cfg.target && *refinements < cfg.max_steps {
+        d.copy_from_slice(r);
+        solve_in_place(d);
+        if !d.iter().all(|v| v.is_finite()) {
+            break;
+        }
+        for (xi, di) in x.iter_mut().zip(d.iter()) {
+            *xi += di;
+        }
+        // r is overwritten; keep the old residual norm to decide whether the step helped.
+        let new_rel = a.residual_into(x, b, r) / bnorm;
+        if new_rel.is_nan() || new_rel >= rel {
+            // No improvement: undo the step (restores x and r) and stop.
+            for (xi, di) in x.iter_mut().zip(d.iter()) {
+                *xi -= di;
+            }
+            rel = a.residual_into(x, b, r) / bnorm;
+            break;
+        }
+        rel = new_rel;
+        *refinements += 1;
+    }
+    if rel.is_nan() || rel > cfg.singular_tol {
+        return Err(LinalgError::Singular(format!(
+            "relative residual {rel:.3e} after the direct solve exceeds {:.1e} \
+             (matrix numerically singular or severely ill-conditioned)",
+            cfg.singular_tol
+        )));
+    }
+    Ok(SolveStats { iterations: 1, relative_residual: rel })
+}
+
+// ---------------------------------------------------------------------------------------------
+// LU
+// ---------------------------------------------------------------------------------------------
+
+/// faer sparse LU with partial (row) pivoting and a COLAMD fill-reducing column ordering.
+///
+/// `analyze` converts the CSR pattern to CSC once (remembering where every CSC value comes from,
+/// so `factor` refills values in O(nnz) without allocating) and runs faer's symbolic LU.
+pub struct FaerLu {
+    threads: usize,
+    par: Par,
+    structure: FactorStructure,
+    refine: Refinement,
+    stamp: PatternStamp,
+    analyses: usize,
+    refinements: usize,
+    n: usize,
+    symbolic: Option<SymbolicLu<usize>>,
+    numeric: NumericLu<usize, f64>,
+    factored: bool,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    csc_pos: Vec<usize>,
+    csc_values: Vec<f64>,
+    mem: MemBuffer,
+    r: Vec<f64>,
+    d: Vec<f64>,
+}
+
+impl FaerLu {
+    /// `threads` > 1 runs the numeric factorisation and solves with `Par::rayon(threads)`.
+    pub fn new(threads: usize) -> Self {
+        Self {
+            threads,
+            par: faer_par(threads),
+            structure: FactorStructure::Auto,
+            refine: Refinement::default(),
+            stamp: PatternStamp::default(),
+            analyses: 0,
+            refinements: 0,
+            n: 0,
+            symbolic: None,
+            numeric: NumericLu::new(),
+            factored: false,
+            col_ptr: Vec::new(),
+            row_idx: Vec::new(),
+            csc_pos: Vec::new(),
+            csc_values: Vec::new(),
+            mem: MemBuffer::new(StackReq::empty()),
+            r: Vec::new(),
+            d: Vec::new(),
+        }
+    }
+
+    /// Force simplicial / supernodal kernels (takes effect at the next analysis).
+    pub fn with_structure(mut self, s: FactorStructure) -> Self {
+        self.structure = s;
+        self.stamp.clear();
+        self
+    }
+
+    /// Replace the post-solve refinement / singularity-check settings.
+    pub fn with_refinement(mut self, r: Refinement) -> Self {
+        self.refine = r;
+        self
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// Number of symbolic analyses performed so far.
+    pub fn analyses(&self) -> usize {
+        self.analyses
+    }
+
+    /// Iterative-refinement steps taken by the last solve.
+    pub fn last_refinements(&self) -> usize {
+        self.refinements
+    }
+
+    fn csc_symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        // Invariants were checked when the pattern was converted in `analyze`.
+        SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
+    }
+}
+
+impl LinearSolver for FaerLu {
+    fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
+        if self.symbolic.is_some() && self.stamp.matches(a) {
+            return Ok(());
+        }
+        self.stamp.clear();
+        self.symbolic = None;
+        self.factored = false;
+        check_square(a)?;
+        let n = a.nrows;
+        self.n = n;
+        csr_to_csc_pattern(a, &mut self.col_ptr, &mut self.row_idx, &mut self.csc_pos);
+        self.csc_values.clear();
+        self.csc_values.resize(a.nnz(), 0.0);
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: self.structure.threshold(),
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(self.csc_symbolic(), params)
+            .map_err(|e| LinalgError::Other(format!("faer symbolic LU failed: {e:?}")))?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(self.par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, self.par),
+        ]);
+        self.mem = MemBuffer::try_new(req)
+            .map_err(|_| LinalgError::Other("out of memory for the LU workspace".into()))?;
+        self.symbolic = Some(symbolic);
+        self.numeric = NumericLu::new();
+        self.r.resize(n, 0.0);
+        self.d.resize(n, 0.0);
+        self.stamp = PatternStamp::of(a);
+        self.analyses += 1;
+        Ok(())
+    }
+
+    fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
+        if self.symbolic.is_none() || !self.stamp.matches(a) {
+            self.analyze(a)?;
+        }
+        self.factored = false;
+        for (v, &k) in self.csc_values.iter_mut().zip(&self.csc_pos) {
+            *v = a.values[k];
+        }
+        if let Some(k) = self.csc_values.iter().position(|v| !v.is_finite()) {
+            return Err(LinalgError::Other(format!("matrix entry {} is not finite", self.csc_pos[k])));
+        }
+        let sym = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
+        let mat = SparseColMatRef::new(sym, &self.csc_values);
+        let symbolic = self.symbolic.as_ref().expect("analysed above");
+        let stack = MemStack::new(&mut self.mem);
+        match symbolic.factorize_numeric_lu(&mut self.numeric, mat, self.par, stack, Default::default()) {
+            Ok(_) => {
+                self.factored = true;
+                Ok(())
+            }
+            Err(LuError::SymbolicSingular { index }) => Err(LinalgError::Singular(format!(
+                "LU: no pivot available at elimination step {index} (structurally singular matrix)"
+            ))),
+            Err(LuError::Generic(e)) => Err(LinalgError::Other(format!("faer numeric LU failed: {e:?}"))),
+        }
+    }
+
+    fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
+        if self.symbolic.is_none() {
+            return Err(LinalgError::NotAnalyzed);
+        }
+        if !self.factored {
+            return Err(LinalgError::Other("LU solve called without a successful factorisation".into()));
+        }
+        if a.nrows != self.n || a.ncols != self.n {
+            return Err(LinalgError::NotAnalyzed);
+        }
+        check_vectors(self.n, b, x)?;
+        let n = self.n;
+        let par = self.par;
+        let symbolic = self.symbolic.as_ref().expect("checked");
+        let numeric = &self.numeric;
+        let mem = &mut self.mem;
+        let lu = LuRef::new_unchecked(symbolic, numeric);
+        solve_checked(a, b, x, &mut self.r, &mut self.d, &self.refine, &mut self.refinements, |v| {
+            lu.solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(v, n, 1),
+                par,
+                MemStack::new(mem),
+            );
+        })
+    }
+
+    fn name(&self) -> &'static str {
+        "lu"
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cholesky
+// ---------------------------------------------------------------------------------------------
+
+/// Which factorisation [`FaerCholesky`] currently holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CholeskyKind {
+    /// A = LLᵀ (positive definite).
+    Llt,
+    /// A = LDLᵀ without pivoting (indefinite fallback, simplicial structure or when LBLᵀ failed).
+    Ldlt,
+    /// A = P L B Lᵀ Pᵀ with Bunch–Kaufman pivoting inside supernodes (indefinite fallback,
+    /// supernodal structure).
+    Lblt,
+}
+
+/// faer sparse Cholesky with an AMD fill-reducing ordering.
+///
+/// The CSR matrix must be symmetric with a structurally symmetric (full) pattern; only the
+/// entries `a[i][j]` with `j ≥ i` (the upper triangle of the CSR rows, which is the lower
+/// triangle of the CSC view faer sees) are read — no copy is made.
+///
+/// The numeric factorisation tries LLᵀ; when a pivot is not positive it falls back on the same
+/// symbolic structure to faer's intranode Bunch–Kaufman LBLᵀ (supernodal structure) and then to
+/// an unpivoted LDLᵀ; if all fail the result is [`LinalgError::Singular`].
+pub struct FaerCholesky {
+    threads: usize,
+    par: Par,
+    structure: FactorStructure,
+    refine: Refinement,
+    stamp: PatternStamp,
+    analyses: usize,
+    refinements: usize,
+    n: usize,
+    symbolic: Option<SymbolicCholesky<usize>>,
+    kind: Option<CholeskyKind>,
+    l_values: Vec<f64>,
+    subdiag: Vec<f64>,
+    perm_fwd: Vec<usize>,
+    perm_inv: Vec<usize>,
+    mem: MemBuffer,
+    r: Vec<f64>,
+    d: Vec<f64>,
+}
+
+impl FaerCholesky {
+    /// `threads` > 1 runs the numeric factorisation and solves with `Par::rayon(threads)`.
+    pub fn new(threads: usize) -> Self {
+        Self {
+            threads,
+            par: faer_par(threads),
+            structure: FactorStructure::Auto,
+            refine: Refinement::default(),
+            stamp: PatternStamp::default(),
+            analyses: 0,
+            refinements: 0,
+            n: 0,
+            symbolic: None,
+            kind: None,
+            l_values: Vec::new(),
+            subdiag: Vec::new(),
+            perm_fwd: Vec::new(),
+            perm_inv: Vec::new(),
+            mem: MemBuffer::new(StackReq::empty()),
+            r: Vec::new(),
+            d: Vec::new(),
+        }
+    }
+
+    /// Force simplicial / supernodal kernels (takes effect at the next analysis).
+    pub fn with_structure(mut self, s: FactorStructure) -> Self {
+        self.structure = s;
+        self.stamp.clear();
+        self
+    }
+
+    /// Replace the post-solve refinement / singularity-check settings.
+    pub fn with_refinement(mut self, r: Refinement) -> Self {
+        self.refine = r;
+        self
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// Number of symbolic analyses performed so far.
+    pub fn analyses(&self) -> usize {
+        self.analyses
+    }
+
+    /// Iterative-refinement steps taken by the last solve.
+    pub fn last_refinements(&self) -> usize {
+        self.refinements
+    }
+
+    /// The factorisation currently held (`None` before a successful `factor`).
+    pub fn kind(&self) -> Option<CholeskyKind> {
+        self.kind
+    }
+
+    /// Whether faer chose (or was forced to) supernodal kernels for the current analysis.
+    pub fn is_supernodal(&self) -> Option<bool> {
+        self.symbolic.as_ref().map(|s| matches!(s.raw(), SymbolicCholeskyRaw::Supernodal(_)))
+    }
+}
+
+/// The CSR arrays of `a` seen as a CSC matrix (that is Aᵀ = A for a symmetric matrix).
+fn csr_as_csc(a: &CsrMatrix) -> SymbolicSparseColMatRef<'_, usize> {
+    SymbolicSparseColMatRef::new_checked(a.nrows, a.ncols, &a.row_ptr, None, &a.col_idx)
+}
+
 impl LinearSolver for FaerCholesky {
-    fn analyze(&mut self, _a: &CsrMatrix) -> Result<(), LinalgError> { unimplemented!() }
-    fn factor(&mut self, _a: &CsrMatrix) -> Result<(), LinalgError> { unimplemented!() }
-    fn solve(&mut self, _a: &CsrMatrix, _b: &[f64], _x: &mut [f64]) -> Result<SolveStats, LinalgError> { unimplemented!() }
-    fn name(&self) -> &'static str { "cholesky" }
+    fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
+        if self.symbolic.is_some() && self.stamp.matches(a) {
+            return Ok(());
+        }
+        self.stamp.clear();
+        self.symbolic = None;
+        self.kind = None;
+        check_square(a)?;
+        let n = a.nrows;
+        self.n = n;
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: self.structure.threshold(),
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(csr_as_csc(a), Side::Lower, SymmetricOrdering::Amd, params)
+            .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))?;
+        let par = self.par;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
+            symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, par),
+        ]);
+        self.mem = MemBuffer::try_new(req)
+            .map_err(|_| LinalgError::Other("out of memory for the Cholesky workspace".into()))?;
+        self.l_values.clear();
+        self.l_values.resize(symbolic.len_val(), 0.0);
+        self.subdiag.resize(n, 0.0);
+        self.perm_fwd.clear();
+        self.perm_fwd.extend(0..n);
+        self.perm_inv.clear();
+        self.perm_inv.extend(0..n);
+        self.r.resize(n, 0.0);
+        self.d.resize(n, 0.0);
+        self.symbolic = Some(symbolic);
+        self.stamp = PatternStamp::of(a);
+        self.analyses += 1;
+        Ok(())
+    }
+
+    fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
+        if self.symbolic.is_none() || !self.stamp.matches(a) {
+            self.analyze(a)?;
+        }
+        self.kind = None;
+        if let Some(k) = a.values.iter().position(|v| !v.is_finite()) {
+            return Err(LinalgError::Other(format!("matrix entry {k} is not finite")));
+        }
+        let symbolic = self.symbolic.as_ref().expect("analysed above");
+        let mat = SparseColMatRef::new(csr_as_csc(a), &a.values);
+        let par = self.par;
+
+        let llt = symbolic.factorize_numeric_llt(
+            &mut self.l_values,
+            mat,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        let llt_pivot = match llt {
+            Ok(_) => {
+                self.kind = Some(CholeskyKind::Llt);
+                return Ok(());
+            }
+            Err(DenseLltError::NonPositivePivot { index }) => index,
+        };
+
+        // Not positive definite: Bunch–Kaufman LBLᵀ inside supernodes (faer only offers it on the
+        // supernodal structure; on the simplicial one it would be a plain LDLᵀ without error
+        // reporting, so that case goes straight to the LDLᵀ below).
+        if matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+            symbolic.factorize_numeric_intranode_lblt(
+                &mut self.l_values,
+                &mut self.subdiag,
+                &mut self.perm_fwd,
+                &mut self.perm_inv,
+                mat,
+                Side::Lower,
+                par,
+                MemStack::new(&mut self.mem),
+                Default::default(),
+            );
+            if self.l_values.iter().chain(&self.subdiag).all(|v| v.is_finite()) {
+                self.kind = Some(CholeskyKind::Lblt);
+                return Ok(());
+            }
+        }
+
+        let ldlt = symbolic.factorize_numeric_ldlt(
+            &mut self.l_values,
+            mat,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        let ldlt = ldlt.map(|_| ());
+        match ldlt {
+            Ok(()) if self.l_values.iter().all(|v| v.is_finite()) => {
+                self.kind = Some(CholeskyKind::Ldlt);
+                Ok(())
+            }
+            Ok(()) => Err(LinalgError::Singular(format!(
+                "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and the \
+                 LDLᵀ fallback produced non-finite values"
+            ))),
+            Err(e) => Err(LinalgError::Singular(format!(
+                "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and the \
+                 indefinite fallback failed ({e:?}); the matrix is singular or needs pivoting \
+                 across supernodes — use the LU solver"
+            ))),
+        }
+    }
+
+    fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
+        if self.symbolic.is_none() {
+            return Err(LinalgError::NotAnalyzed);
+        }
+        let Some(kind) = self.kind else {
+            return Err(LinalgError::Other("Cholesky solve called without a successful factorisation".into()));
+        };
+        if a.nrows != self.n || a.ncols != self.n {
+            return Err(LinalgError::NotAnalyzed);
+        }
+        check_vectors(self.n, b, x)?;
+        let n = self.n;
+        let par = self.par;
+        let symbolic = self.symbolic.as_ref().expect("checked");
+        let l_values = &self.l_values;
+        let subdiag = &self.subdiag;
+        let (perm_fwd, perm_inv) = (&self.perm_fwd, &self.perm_inv);
+        let mem = &mut self.mem;
+        solve_checked(a, b, x, &mut self.r, &mut self.d, &self.refine, &mut self.refinements, |v| {
+            let rhs = MatMut::from_column_major_slice_mut(v, n, 1);
+            let stack = MemStack::new(mem);
+            match kind {
+                CholeskyKind::Llt => LltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
+                CholeskyKind::Ldlt => LdltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
+                CholeskyKind::Lblt => {
+                    let perm = PermRef::new_checked(perm_fwd, perm_inv, n);
+                    IntranodeLbltRef::new(symbolic, l_values, subdiag, perm)
+                        .solve_in_place_with_conj(Conj::No, rhs, par, stack)
+                }
+            }
+        })
+    }
+
+    fn name(&self) -> &'static str {
+        "cholesky"
+    }
 }

@@ -1,11 +1,65 @@
-//! Finite-strain J2 plasticity. (stub: being written)
+//! Finite-strain von Mises (J2) plasticity with isotropic hardening.
+//!
+//! Exponential map on the logarithmic elastic strain (de Souza Neto, Perić & Owen 2008, ch. 14
+//! and Box 7.3/7.4; Eterovic & Bathe 1990; Weber & Anand 1990), see [`logstrain`]:
+//!
+//! ```text
+//!   b_tr = F C_p⁻¹ Fᵀ,  ε_tr = ½ ln b_tr,  s_tr = 2G dev ε_tr,  q_tr = √(3/2) ‖s_tr‖,
+//!   yield:   Φ = q_tr − σ_y(ε̄ᵖ_n) ≤ 0  →  elastic step,
+//!   return:  q_tr − 3GΔγ − σ_y(ε̄ᵖ_n + Δγ) = 0   (exact: piecewise-linear table),
+//!   τ′ = (1 − 3GΔγ/q_tr) s_tr,   ε̄ᵖ = ε̄ᵖ_n + Δγ,   C_p⁻¹ = F⁻¹ exp(2 ε_e) F⁻ᵀ.
+//! ```
+//!
+//! Tangent: D = 2G(1 − 3GΔγ/q_tr) I_dev + 6G²(Δγ/q_tr − 1/(3G + H)) N̂ ⊗ N̂ (Box 7.4, H the
+//! table slope on the segment holding the solution), pushed to the spatial `cc` through
+//! L = ∂ ln b/∂b; the product D : L : (l b + b lᵀ) is not symmetric in general, hence
+//! `symmetric_tangent() == false`.
+use super::logstrain::exponential_map_update;
 use super::*;
+
 #[derive(Clone, Debug, PartialEq)]
-pub struct J2Plastic { pub e: f64, pub nu: f64, pub hardening: HardeningTable }
-impl J2Plastic { pub fn new(e: f64, nu: f64, hardening: HardeningTable) -> Self { Self { e, nu, hardening } } }
+pub struct J2Plastic {
+    pub e: f64,
+    pub nu: f64,
+    pub hardening: HardeningTable,
+}
+
+impl J2Plastic {
+    /// Young's modulus `e` (MPa), Poisson's ratio `nu`, flow stress table σ_y(ε̄ᵖ).
+    pub fn new(e: f64, nu: f64, hardening: HardeningTable) -> Self {
+        Self { e, nu, hardening }
+    }
+}
+
 impl ConstitutiveLaw for J2Plastic {
-    fn shear_modulus(&self) -> f64 { lame_from_e_nu(self.e, self.nu).0 }
-    fn bulk_modulus(&self) -> Option<f64> { lame_from_e_nu(self.e, self.nu).1 }
-    fn symmetric_tangent(&self) -> bool { false }
-    fn update(&self, _ff: &Matrix3<f64>, _old: &MatState, _inc: TimeIncrement) -> Result<MatResponse, MaterialError> { unimplemented!() }
+    fn shear_modulus(&self) -> f64 {
+        lame_from_e_nu(self.e, self.nu).0
+    }
+    fn bulk_modulus(&self) -> Option<f64> {
+        lame_from_e_nu(self.e, self.nu).1
+    }
+    fn symmetric_tangent(&self) -> bool {
+        false
+    }
+    fn update(
+        &self,
+        ff: &Matrix3<f64>,
+        old: &MatState,
+        _inc: TimeIncrement,
+    ) -> Result<MatResponse, MaterialError> {
+        let g = self.shear_modulus();
+        let out = exponential_map_update(ff, &old.cp_inv, g, |q_tr| {
+            Ok(self.hardening.return_map(3.0 * g, q_tr, old.eps_p))
+        })?;
+        let state = MatState {
+            cp_inv: out.cp_inv,
+            eps_p: old.eps_p + out.dgamma,
+            eps_c: old.eps_c,
+        };
+        Ok(MatResponse {
+            tau: out.tau,
+            cc: out.cc,
+            state,
+        })
+    }
 }

@@ -32,7 +32,7 @@ use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-pub use creep::Creep;
+pub use creep::{Creep, CreepParams};
 pub use elastic::Elastic;
 pub use hardening::HardeningTable;
 pub use j2::J2Plastic;

@@ -1,0 +1,37 @@
+//! One linear solve of the tangent of our own assembly (320 × 320 elastic block, 205 440 free
+//! unknowns): our LU, Cholesky and PCG wrappers (numeric factorisation + solve, symbolic
+//! analysis reused as in a Newton loop) against bare faer calls on the same matrix.
+//! Run: `cargo bench --bench solve`.
+use criterion::{criterion_group, criterion_main, Criterion};
+use mpfem::bench_support::{assembly_fixture, Law};
+use mpfem::linalg::{direct, make_solver, LinearSolverKind, Preconditioner, SolverOptions};
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let mut fx = assembly_fixture(320, Law::Elastic, 2);
+    fx.assemble();
+    let (kk, b) = fx.system();
+    assert!(kk.nrows >= 200_000, "system has {} unknowns", kk.nrows);
+    let mut g = c.benchmark_group("solve_205k");
+    g.sample_size(10);
+    for kind in [LinearSolverKind::Lu, LinearSolverKind::Cholesky, LinearSolverKind::Pcg] {
+        let opts = SolverOptions { kind, preconditioner: Preconditioner::Ic0, pcg_tol: 1e-8, pcg_max_iterations: 20_000, threads: 1 };
+        let mut s = make_solver(&opts);
+        s.analyze(&kk).expect("analyze");
+        let mut x = vec![0.0; b.len()];
+        g.bench_function(format!("ours_{kind:?}"), |bn| {
+            bn.iter(|| {
+                s.factor(&kk).expect("factor");
+                x.iter_mut().for_each(|v| *v = 0.0);
+                s.solve(&kk, &b, &mut x).expect("solve");
+                black_box(&x);
+            })
+        });
+    }
+    g.bench_function("bare_faer_lu", |bn| bn.iter(|| black_box(direct::bare_faer_lu_solve(&kk, &b))));
+    g.bench_function("bare_faer_cholesky", |bn| bn.iter(|| black_box(direct::bare_faer_cholesky_solve(&kk, &b))));
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,517 @@
+//! Case-file validation: every bad input gives one clear error naming the key, the value and
+//! the expectation; every shipped job parses; defaults are applied as documented.
+
+use std::path::{Path, PathBuf};
+
+use mpfem::case::{
+    self, Amplitude, CaseError, Formulation, LinearChoice, LoadKind, NewtonKind, ShapeSpec,
+    SolverSpec, TimeSpec,
+};
+use mpfem::linalg::{LinearSolverKind, Preconditioner};
+use mpfem::material::Material;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn bad(name: &str) -> CaseError {
+    let path = root().join("jobs/examples/bad").join(name);
+    assert!(path.exists(), "missing test input {}", path.display());
+    match case::load(&path) {
+        Ok(_) => panic!("{name} should have been rejected"),
+        Err(e) => e,
+    }
+}
+
+/// A minimal valid case with `extra` appended and `from` replaced by `to`.
+const BASE: &str = r#"
+[[materials]]
+name = "alu"
+model = "elastic"
+youngs_modulus = 64100.0
+poisson_ratio = 0.3
+
+[[bodies]]
+name = "block"
+material = "alu"
+mesh_size = 2.0
+shape = { type = "rectangle", origin = [0.0, 0.0], size = [20.0, 20.0] }
+
+[time]
+end = 1.0
+dt = 0.1
+"#;
+
+fn parse(text: &str) -> Result<case::Case, CaseError> {
+    case::parse(text, Path::new("."))
+}
+
+fn err_of(text: &str) -> CaseError {
+    match parse(text) {
+        Ok(_) => panic!("should have been rejected:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+fn with(from: &str, to: &str) -> String {
+    assert!(BASE.contains(from), "{from} not in BASE");
+    BASE.replacen(from, to, 1)
+}
+
+fn assert_has(e: &CaseError, parts: &[&str]) {
+    let s = e.to_string();
+    for p in parts {
+        assert!(s.contains(p), "error {s:?} does not mention {p:?}");
+    }
+}
+
+#[test]
+fn base_is_valid() {
+    parse(BASE).unwrap();
+}
+
+#[test]
+fn unknown_key_names_line_and_field() {
+    let e = bad("unknown_key.toml");
+    assert_eq!(e.key, "materials[0].youngs_modulus2");
+    assert_has(
+        &e,
+        &[
+            "line 5, column 1",
+            "unknown field `youngs_modulus2`",
+            "expected one of",
+            "`youngs_modulus`",
+        ],
+    );
+    // in a nested inline table too
+    let e = err_of(&with(
+        "size = [20.0, 20.0] }",
+        "size = [20.0, 20.0], radius = 1.0, colour = 3 }",
+    ));
+    assert_eq!(e.key, "bodies[0].shape.colour");
+    assert_has(&e, &["line 12", "unknown field `colour`"]);
+    // at the top level
+    let e = err_of(&format!("{BASE}\n[mesh]\nsize = 1\n"));
+    assert_has(&e, &["unknown field `mesh`", "line 18"]);
+}
+
+#[test]
+fn wrong_type() {
+    let e = bad("wrong_type.toml");
+    assert_eq!(e.key, "materials[0].poisson_ratio");
+    assert_has(
+        &e,
+        &["line 6", "invalid type: string \"0.3\"", "expected f64"],
+    );
+    let e = err_of(&with("mesh_size = 2.0", "mesh_size = true"));
+    assert_has(&e, &["bodies[0].mesh_size", "boolean", "f64"]);
+    let e = err_of(&format!("{BASE}\n[solver]\nmax_iterations = 2.5\n"));
+    assert_has(&e, &["solver.max_iterations", "2.5", "i64"]);
+    let e = err_of(&format!("{BASE}\n[solver]\nline_search = \"yes\"\n"));
+    assert_has(&e, &["solver.line_search", "\"yes\"", "bool"]);
+}
+
+#[test]
+fn pairs_must_have_two_entries() {
+    let e = err_of(&with("size = [20.0, 20.0]", "size = [20.0, 20.0, 1.0]"));
+    assert_eq!(e.key, "bodies[0].shape.size");
+    assert_has(&e, &["line 12", "invalid length 3", "exactly two"]);
+    let e = err_of(&with("size = [20.0, 20.0]", "size = [20.0]"));
+    assert_has(&e, &["bodies[0].shape.size", "invalid length 1"]);
+    let e = err_of(&with("mesh_size = 2.0", "divisions = [1, 2, 3]"));
+    assert_has(&e, &["bodies[0].divisions", "invalid length 3"]);
+}
+
+#[test]
+fn syntax_error_has_line() {
+    let e = err_of(&with("poisson_ratio = 0.3", "poisson_ratio = = 0.3"));
+    assert_has(&e, &["line 6"]);
+}
+
+#[test]
+fn youngs_modulus_must_be_positive() {
+    for v in ["0.0", "-5.0"] {
+        let e = err_of(&with(
+            "youngs_modulus = 64100.0",
+            &format!("youngs_modulus = {v}"),
+        ));
+        assert_eq!(e.key, "materials[0].youngs_modulus");
+        assert_has(&e, &[v, "Young's modulus", "> 0", "line 5"]);
+    }
+}
+
+#[test]
+fn poisson_ratio_range() {
+    let e = bad("poisson_too_large.toml");
+    assert_eq!(e.key, "materials[0].poisson_ratio");
+    assert_has(&e, &["0.7", "Poisson's ratio in [0, 0.5]"]);
+    let e = err_of(&with("poisson_ratio = 0.3", "poisson_ratio = -0.1"));
+    assert_eq!(e.key, "materials[0].poisson_ratio");
+    assert_has(&e, &["-0.1", "Poisson's ratio in [0, 0.5]"]);
+    // the limits are accepted
+    parse(&with("poisson_ratio = 0.3", "poisson_ratio = 0.5")).unwrap();
+    parse(&with("poisson_ratio = 0.3", "poisson_ratio = 0")).unwrap();
+}
+
+#[test]
+fn hardening_table_not_increasing() {
+    let e = bad("hardening_not_increasing.toml");
+    assert_eq!(e.key, "materials[0].hardening.points[2]");
+    assert_has(&e, &["0.0011", "0.0031", "strictly increasing"]);
+    let j2 = with("model = \"elastic\"", "model = \"j2\"");
+    let e = err_of(&j2.replace(
+        "poisson_ratio = 0.3",
+        "poisson_ratio = 0.3\nhardening = { strain = \"plastic\", points = [[0.0, 100.0], [0.1, 90.0]] }",
+    ));
+    assert_eq!(e.key, "materials[0].hardening.points[1]");
+    assert_has(&e, &["90.0", "100.0", "non-decreasing"]);
+}
+
+#[test]
+fn missing_hardening_file_names_path() {
+    let e = bad("missing_hardening_file.toml");
+    assert_eq!(e.key, "materials[0].hardening.file");
+    assert_has(&e, &["no_such_dir", "missing_table.csv", "cannot read"]);
+}
+
+#[test]
+fn missing_case_file_names_path() {
+    let p = root().join("jobs/does_not_exist.toml");
+    let e = case::load(&p).unwrap_err();
+    assert_has(&e, &["does_not_exist.toml", "cannot read case file"]);
+}
+
+#[test]
+fn unknown_material_reference() {
+    let e = bad("unknown_material.toml");
+    assert_eq!(e.key, "bodies[0].material");
+    assert_has(&e, &["\"steel\"", "no material named", "known: alu"]);
+}
+
+#[test]
+fn unknown_edge_set() {
+    let e = bad("unknown_edge_set.toml");
+    assert_eq!(e.key, "boundary[0].set");
+    assert_has(
+        &e,
+        &[
+            "\"outer\"",
+            "rectangle",
+            "left, right, bottom, top, boundary",
+        ],
+    );
+    let e = err_of(&format!(
+        "{BASE}\n[output]\nreactions = [\"block.side3\"]\n"
+    ));
+    assert_eq!(e.key, "output.reactions[0]");
+    assert_has(&e, &["side3"]);
+    let e = err_of(&format!("{BASE}\n[output]\nreactions = [\"brick.top\"]\n"));
+    assert_has(&e, &["no body named \"brick\"", "known: block"]);
+}
+
+#[test]
+fn creep_without_stress_unit() {
+    let e = bad("creep_without_stress_unit.toml");
+    assert_eq!(e.key, "materials[0].creep.stress_unit");
+    assert_has(
+        &e,
+        &[
+            "missing",
+            "\"Pa\"",
+            "\"MPa\"",
+            "paper does not state",
+            "orders of magnitude",
+        ],
+    );
+}
+
+#[test]
+fn duplicate_body_names() {
+    let e = bad("duplicate_body.toml");
+    assert_eq!(e.key, "bodies[1].name");
+    assert_has(&e, &["\"block\"", "duplicated body name", "unique"]);
+}
+
+#[test]
+fn dt_larger_than_end() {
+    let e = bad("dt_larger_than_end.toml");
+    assert_eq!(e.key, "time.dt");
+    assert_has(&e, &["2.0", "dt <= end = 1.0"]);
+}
+
+#[test]
+fn nan_and_inf_rejected() {
+    let e = err_of(&with("youngs_modulus = 64100.0", "youngs_modulus = nan"));
+    assert_eq!(e.key, "materials[0].youngs_modulus");
+    assert_has(&e, &["NaN", "finite"]);
+    let e = err_of(&with("end = 1.0", "end = inf"));
+    assert_eq!(e.key, "time.end");
+    assert_has(&e, &["inf", "finite"]);
+    let e = err_of(&with("size = [20.0, 20.0]", "size = [20.0, nan]"));
+    assert_eq!(e.key, "bodies[0].shape.size[1]");
+}
+
+#[test]
+fn other_validation_errors() {
+    // missing [time]
+    let e = err_of(&BASE.replace("[time]\nend = 1.0\ndt = 0.1\n", ""));
+    assert_eq!(e.key, "time");
+    // j2 without yield behaviour, yield_stress on an elastic material
+    let e = err_of(&with("model = \"elastic\"", "model = \"j2\""));
+    assert_has(&e, &["materials[0]", "yield_stress", "hardening"]);
+    let e = err_of(&with(
+        "poisson_ratio = 0.3",
+        "poisson_ratio = 0.3\nyield_stress = 100.0",
+    ));
+    assert_eq!(e.key, "materials[0].yield_stress");
+    // bad choice strings
+    let e = err_of(&format!("{BASE}\n[solver]\nlinear = \"gmres\"\n"));
+    assert_has(&e, &["solver.linear", "\"gmres\"", "\"cholesky\""]);
+    let e = err_of(&format!("[model]\nformulation = \"eulerian\"\n{BASE}"));
+    assert_has(
+        &e,
+        &["model.formulation", "\"eulerian\"", "total_lagrangian"],
+    );
+    // boundary without displacements, radial on a rectangle
+    let e = err_of(&format!(
+        "{BASE}\n[[boundary]]\nbody = \"block\"\nset = \"top\"\n"
+    ));
+    assert_eq!(e.key, "boundary[0]");
+    let e = err_of(&format!(
+        "{BASE}\n[[boundary]]\nbody = \"block\"\nset = \"top\"\nradial = 1.0\n"
+    ));
+    assert_eq!(e.key, "boundary[0].radial");
+    // amplitude table times not increasing
+    let e = err_of(&format!(
+        "{BASE}\n[[boundary]]\nbody = \"block\"\nset = \"top\"\nuy = 1.0\namplitude = [[0.0, 0.0], [1.0, 1.0], [0.5, 2.0]]\n"
+    ));
+    assert_eq!(e.key, "boundary[0].amplitude[2]");
+    assert_has(&e, &["strictly increasing"]);
+    // pressure needs a scalar
+    let e = err_of(&format!("{BASE}\n[[loads]]\nbody = \"block\"\nset = \"top\"\ntype = \"pressure\"\nvalue = [1.0, 2.0]\n"));
+    assert_eq!(e.key, "loads[0].value");
+    // shape parameter of another type
+    let e = err_of(&with(
+        "size = [20.0, 20.0] }",
+        "size = [20.0, 20.0], radius = 3.0 }",
+    ));
+    assert_eq!(e.key, "bodies[0].shape.radius");
+    // polygon with two vertices, divisions on a disc
+    let e = err_of(&with(
+        "shape = { type = \"rectangle\", origin = [0.0, 0.0], size = [20.0, 20.0] }",
+        "shape = { type = \"polygon\", vertices = [[0, 0], [1, 0]] }",
+    ));
+    assert_eq!(e.key, "bodies[0].shape.vertices");
+    let e = err_of(&with(
+        "shape = { type = \"rectangle\", origin = [0.0, 0.0], size = [20.0, 20.0] }",
+        "divisions = [4, 4]\nshape = { type = \"disc\", radius = 3.0 }",
+    ));
+    assert_eq!(e.key, "bodies[0].divisions");
+    // time keys
+    let e = err_of(&with("dt = 0.1", "dt = 0.1\ncutback = 1.0"));
+    assert_eq!(e.key, "time.cutback");
+    let e = err_of(&with("dt = 0.1", "dt = 0.1\nmax_steps = 0"));
+    assert_has(&e, &["time.max_steps", "value 0", ">= 1"]);
+    // creep parameter out of range
+    let creep = with("model = \"elastic\"", "model = \"creep\"").replace(
+        "poisson_ratio = 0.3",
+        "poisson_ratio = 0.3\ncreep = { preset = \"asphalt_table2\", stress_unit = \"Pa\", m = 1.5 }",
+    );
+    let e = err_of(&creep);
+    assert_eq!(e.key, "materials[0].creep.m");
+    // duplicate material names
+    let e = err_of(&format!(
+        "{BASE}\n[[materials]]\nname = \"alu\"\nmodel = \"elastic\"\nyoungs_modulus = 1.0\npoisson_ratio = 0.2\n"
+    ));
+    assert_eq!(e.key, "materials[1].name");
+}
+
+#[test]
+fn error_display_is_key_colon_message() {
+    let e = CaseError::new("time.dt", "value 2.0; expected 0 < dt <= end");
+    assert_eq!(e.to_string(), "time.dt: value 2.0; expected 0 < dt <= end");
+}
+
+#[test]
+fn all_shipped_jobs_parse() {
+    let mut files = vec![root().join("jobs/default.toml")];
+    for entry in std::fs::read_dir(root().join("jobs/examples")).unwrap() {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            files.push(p);
+        }
+    }
+    assert!(
+        files.len() >= 6,
+        "expected the example jobs, found {files:?}"
+    );
+    for f in &files {
+        if let Err(e) = case::load(f) {
+            panic!("{} does not parse: {e}", f.display());
+        }
+    }
+}
+
+#[test]
+fn documented_complete_example_parses() {
+    let doc = std::fs::read_to_string(root().join("docs/case-file.md")).unwrap();
+    let section = doc
+        .split("## Complete example")
+        .nth(1)
+        .expect("docs have a complete example");
+    let block = section
+        .split("```toml")
+        .nth(1)
+        .unwrap()
+        .split("```")
+        .next()
+        .unwrap();
+    let c = case::parse(block, &root())
+        .unwrap_or_else(|e| panic!("documented example does not parse: {e}"));
+    assert_eq!(c.materials.len(), 2);
+    assert_eq!(c.bodies.len(), 2);
+    assert_eq!(c.bodies[1].divisions, Some([10, 5]));
+    assert_eq!(c.time.dt_min, 1e-7);
+    assert_eq!(c.linear_kind(), LinearSolverKind::Lu);
+}
+
+#[test]
+fn every_bad_job_is_rejected() {
+    for entry in std::fs::read_dir(root().join("jobs/examples/bad")).unwrap() {
+        let p = entry.unwrap().path();
+        assert!(
+            case::load(&p).is_err(),
+            "{} should be rejected",
+            p.display()
+        );
+    }
+}
+
+#[test]
+fn default_case_parses() {
+    let c = case::default_case();
+    assert_eq!(c.formulation, Formulation::UpdatedLagrangian);
+    assert_eq!(c.bodies.len(), 1);
+    assert_eq!(c.bodies[0].name, "block");
+    assert_eq!(
+        c.bodies[0].shape,
+        ShapeSpec::Rectangle {
+            origin: [0.0, 0.0],
+            size: [20.0, 20.0]
+        }
+    );
+    assert_eq!(c.bodies[0].mesh_size, 2.0);
+    assert!(matches!(c.materials[0].material, Material::J2(_)));
+    assert_eq!(c.time.end, 0.6);
+    assert_eq!(c.time.dt, 0.02);
+    let top = c.boundary.iter().find(|b| b.set == "top").unwrap();
+    assert_eq!(top.uy, Some(-6.0));
+    assert_eq!(top.amplitude, Amplitude::Ramp);
+    assert!(c.output.reactions.contains(&(0, "top".to_string())));
+    assert_eq!(case::parse(case::DEFAULT_JOB, Path::new(".")).unwrap(), c);
+}
+
+#[test]
+fn defaults_are_applied() {
+    let c = parse(BASE).unwrap();
+    assert_eq!(c.title, "");
+    assert_eq!(c.formulation, Formulation::UpdatedLagrangian);
+    assert_eq!(c.materials[0].density, 1e-9);
+    assert!(c.boundary.is_empty() && c.loads.is_empty());
+    assert_eq!(c.bodies[0].divisions, None);
+    assert_eq!(
+        c.time,
+        TimeSpec {
+            end: 1.0,
+            dt: 0.1,
+            dt_min: 1e-6,
+            dt_max: 1.0,
+            growth: 1.5,
+            cutback: 0.5,
+            easy_iterations: 6,
+            max_steps: 100_000
+        }
+    );
+    let s = c.solver;
+    assert_eq!(s, SolverSpec::default());
+    assert_eq!(s.newton, NewtonKind::Full);
+    assert_eq!(s.max_iterations, 25);
+    assert_eq!(s.residual_tol, 1e-8);
+    assert_eq!(s.energy_tol, 1e-16);
+    assert!(s.line_search);
+    assert_eq!(s.linear, LinearChoice::Auto);
+    assert_eq!(s.preconditioner, Preconditioner::Ic0);
+    assert_eq!(s.pcg_tol, 1e-10);
+    assert_eq!(s.pcg_max_iterations, 10_000);
+    assert_eq!(s.threads, 0);
+    assert_eq!(s.incompressible_penalty, 1000.0);
+    assert_eq!(s.volume_tol, 1e-10);
+    assert_eq!(s.max_volume_updates, 30);
+    assert!(c.output.reactions.is_empty() && c.output.displacements.is_empty());
+    assert_eq!(c.linear_kind(), LinearSolverKind::Cholesky);
+
+    // modified Newton raises the default iteration limit
+    let m = parse(&format!("{BASE}\n[solver]\nnewton = \"modified\"\n")).unwrap();
+    assert_eq!(m.solver.newton, NewtonKind::Modified);
+    assert_eq!(m.solver.max_iterations, 60);
+    // dt_min default never exceeds dt
+    let t = parse(&with("dt = 0.1", "dt = 1e-8")).unwrap();
+    assert_eq!(t.time.dt_min, 1e-8);
+    // "tl" alias, follower pressure switches auto to LU
+    let p = parse(&format!(
+        "[model]\nformulation = \"tl\"\n{BASE}\n[[loads]]\nbody = \"block\"\nset = \"top\"\ntype = \"pressure\"\nvalue = 2\n"
+    ))
+    .unwrap();
+    assert_eq!(p.formulation, Formulation::TotalLagrangian);
+    assert_eq!(p.loads[0].kind, LoadKind::Pressure(2.0));
+    assert_eq!(p.loads[0].amplitude, Amplitude::Ramp);
+    assert_eq!(p.linear_kind(), LinearSolverKind::Lu);
+}
+
+#[test]
+fn examples_have_expected_content() {
+    let c = case::load(&root().join("jobs/examples/asphalt_creep_block.toml")).unwrap();
+    match &c.materials[0].material {
+        Material::Creep(cr) => {
+            assert_eq!(cr.params.a, 5.15e-8);
+            assert_eq!(cr.params.n, 0.826);
+            assert_eq!(cr.params.q, 0.22);
+            assert_eq!(cr.params.stress_scale, 1e6);
+        }
+        other => panic!("expected creep, got {other:?}"),
+    }
+    let c = case::load(&root().join("jobs/examples/thick_cylinder.toml")).unwrap();
+    assert_eq!(c.bodies[0].shape.center(), Some([0.0, 0.0]));
+    assert_eq!(c.boundary[2].radial, Some(0.5));
+    assert_eq!(c.bodies[0].divisions, Some([10, 16]));
+    let c = case::load(&root().join("jobs/examples/cook_membrane.toml")).unwrap();
+    assert_eq!(c.bodies[0].shape, ShapeSpec::Cook);
+    assert_eq!(c.loads[0].kind, LoadKind::Force([0.0, 1.0]));
+    assert!(c.bodies[0].mesh_size > 0.0);
+    let c = case::load(&root().join("jobs/examples/upsetting_table_file.toml")).unwrap();
+    assert_eq!(c.base_dir, root().join("jobs/examples"));
+}
+
+#[test]
+fn never_panics_on_garbage() {
+    let inputs = [
+        "",
+        "\u{0}",
+        "[[materials]]",
+        "materials = 3",
+        "bodies = [1, 2]",
+        "[time]\nend = -1\ndt = 0",
+        "title = 5",
+        "[[materials]]\nname = \"\"\n",
+        "[[materials]]\nname = \"a\"\nmodel = \"j2\"\nyoungs_modulus = 1\npoisson_ratio = 0.3\nhardening = {}\n",
+        "[[materials]]\nname = \"a\"\nmodel = \"creep\"\nyoungs_modulus = 1\npoisson_ratio = 0.3\ncreep = { stress_unit = \"Pa\" }\n",
+        "ü = 1\n[x\n",
+    ];
+    for text in inputs {
+        let r = std::panic::catch_unwind(|| case::parse(text, Path::new(".")));
+        match r {
+            Ok(res) => assert!(res.is_err(), "{text:?} should be rejected"),
+            Err(_) => panic!("panicked on {text:?}"),
+        }
+    }
+}
