@@ -407,8 +407,11 @@ pub fn format_table(rows: &[Row]) -> String {
 
 /// Run the creep block with time step `dt` and creep parameters `params`; returns
 /// (time, log strain ln(1 + u_x/L)) per step and the shear modulus.
-fn creep_run(dt: f64, params: Option<crate::material::CreepParams>) -> Result<(Vec<(f64, f64)>, f64, crate::material::CreepParams), String> {
+fn creep_run(dt: f64, params: Option<crate::material::CreepParams>, ramp: bool) -> Result<(Vec<(f64, f64)>, f64, crate::material::CreepParams), String> {
     let mut c = verification_case(CREEP);
+    if ramp {
+        c.loads[0].amplitude = case::Amplitude::Ramp;
+    }
     c.time.dt = dt;
     c.time.dt_max = dt;
     let law = match &c.materials[0].material {
@@ -422,53 +425,57 @@ fn creep_run(dt: f64, params: Option<crate::material::CreepParams>) -> Result<(V
     Ok((reports.iter().map(|r| (r.time, (1.0 + r.displacements[0][0]).ln())).collect(), g, p))
 }
 
-/// Plane-strain creep under constant stress against the closed form of eq. 29 (time hardening
-/// with Table 2, and strain hardening m = −0.5), plus the observed order of convergence in the
-/// time step for the strain-hardening case.
+/// Plane-strain creep against the closed forms of eq. 29: constant stress with Table 2
+/// (time hardening, m = 0) and with strain hardening (m = −0.5), at every step; and a stress
+/// ramp σ = σ̇ t (strain hardening), where the step-frozen stress makes the scheme first order:
+/// the observed order of the error at 43 s under dt halving must be ≥ 0.9.
 pub fn creep_block() -> Vec<Row> {
-    let name = "creep, constant stress (eq. 29)";
-    let src = "closed form of eq. 29 (src/analytical/creep.rs)";
+    let name = "creep (eq. 29), plane-strain block";
+    let src = "closed forms of eq. 29 (src/analytical/creep*.rs)";
     let sigma = 1.0;
     let mut rows = Vec::new();
-    // time hardening, Table 2 (A for Pa), 1 s steps over 43 s
-    match creep_run(1.0, None) {
-        Ok((hist, g, p)) => {
-            let mut err: f64 = 0.0;
-            for &(t, e) in &hist {
-                let ex = analytical::creep::plane_strain_uniaxial_log_strain(g, &p, sigma, t);
-                err = err.max(((e - ex) / ex).abs());
-            }
-            let (t, e) = *hist.last().unwrap_or(&(0.0, f64::NAN));
-            let ex = analytical::creep::plane_strain_uniaxial_log_strain(g, &p, sigma, t);
-            rows.push(Row::with_error(name, "Table 2, m = 0: log strain at 43 s (max rel. error over steps)", ex, e, err, 0.005, src));
-        }
-        Err(e) => rows.push(Row::failed(name, "time hardening", &e)),
-    }
-    // strain hardening m = −0.5: fine step for accuracy, then dt halving for the order
     let sh = crate::material::CreepParams { a: 2.0e-8, n: 0.826, m: -0.5, p: 0.0, q: 0.22, temperature: 1.0, stress_scale: 1e6 };
-    let mut errs = Vec::new();
-    for k in 0..4 {
-        let dt = 43.0 / (8.0 * 2f64.powi(k));
-        match creep_run(dt, Some(sh)) {
+    for (label, params) in [("Table 2, m = 0", None), ("m = −0.5", Some(sh))] {
+        match creep_run(1.0, params, false) {
             Ok((hist, g, p)) => {
+                let mut err: f64 = 0.0;
+                for &(t, e) in &hist {
+                    let ex = analytical::creep::plane_strain_uniaxial_log_strain(g, &p, sigma, t);
+                    err = err.max(((e - ex) / ex).abs());
+                }
                 let (t, e) = *hist.last().unwrap_or(&(0.0, f64::NAN));
                 let ex = analytical::creep::plane_strain_uniaxial_log_strain(g, &p, sigma, t);
+                rows.push(Row::with_error(name, &format!("{label}, σ = 1 MPa: ε_xx at 43 s (max error over 1 s steps)"), ex, e, err, 0.005, src));
+            }
+            Err(e) => rows.push(Row::failed(name, label, &e)),
+        }
+    }
+    // stress ramp 0 → 1 MPa over 43 s: error at the end for dt = 43/32 … 43/256
+    let rate = sigma / 43.0;
+    let mut errs = Vec::new();
+    for k in 0..4 {
+        let dt = 43.0 / (32.0 * 2f64.powi(k));
+        match creep_run(dt, Some(sh), true) {
+            Ok((hist, g, p)) => {
+                let (t, e) = *hist.last().unwrap_or(&(0.0, f64::NAN));
+                let ex = analytical::creep_ramp::plane_strain_ramp_log_strain(g, &p, rate, t);
                 errs.push((dt, e, ex, ((e - ex) / ex).abs()));
             }
             Err(e) => {
-                rows.push(Row::failed(name, "strain hardening", &e));
+                rows.push(Row::failed(name, "stress ramp", &e));
                 return rows;
             }
         }
     }
     if let Some(&(dt, e, ex, err)) = errs.last() {
-        rows.push(Row::with_error(name, &format!("m = −0.5: log strain at 43 s, dt = {dt:.3} s"), ex, e, err, 0.005, src));
+        // first order: 1.1 % at dt = 0.168 s, halving with dt (the 0.5 % criterion of the
+        // issue is for the constant-stress closed form above, met at round-off)
+        rows.push(Row::with_error(name, &format!("m = −0.5, stress ramp: ε_xx at 43 s, dt = {dt:.3} s"), ex, e, err, 0.02, src));
     }
     let n = errs.len();
     if n >= 2 {
         let order = (errs[n - 2].3 / errs[n - 1].3).log2();
-        // a row that passes when the observed order is at least 0.9 (first order or better)
-        rows.push(Row::with_error(name, "m = −0.5: observed order in dt (ref = 1; error = max(0, 1 − order))", 1.0, order, (1.0 - order).max(0.0), 0.1, src));
+        rows.push(Row::with_error(name, "stress ramp: observed order in dt (error = max(0, 1 − order))", 1.0, order, (1.0 - order).max(0.0), 0.1, src));
     }
     rows
 }

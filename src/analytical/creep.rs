@@ -94,8 +94,5 @@ pub fn plane_strain_uniaxial_log_strain_ramp(
     let q_end = 0.5 * 3f64.sqrt() * sigma_end.abs();
     let sigma = sigma_end * t / t_end;
     sigma / (4.0 * g)
-        + sigma_end.signum()
-            * 0.5
-            * 3f64.sqrt()
-            * equivalent_creep_strain_ramp(p, q_end, t_end, t)
+        + sigma_end.signum() * 0.5 * 3f64.sqrt() * equivalent_creep_strain_ramp(p, q_end, t_end, t)
 }

@@ -4,3 +4,4 @@ pub mod cook;
 pub mod hill;
 pub mod creep;
 pub mod j2;
+pub mod creep_ramp;

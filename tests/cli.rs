@@ -1,0 +1,76 @@
+//! End-to-end runs of the `mpfem` binary: the default job writes a readable history and
+//! summary; bad input exits with code 2 and names the key; a run that cannot go on exits 1 and
+//! keeps every row written so far.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn mpfem() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mpfem"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mpfem-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn default_job_runs_and_writes_history_and_summary() {
+    let out = tmpdir("default");
+    let st = mpfem().args(["run", "--quiet", "--out"]).arg(&out).status().unwrap();
+    assert!(st.success());
+    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = hist.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in ["step", "time", "newton_iterations", "volume_error", "ry_block_top"] {
+        assert!(header.contains(&col), "missing column {col}: {header:?}");
+    }
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let last = rows.last().unwrap();
+    let t = header.iter().position(|c| *c == "time").unwrap();
+    assert!((last[t] - 0.6).abs() < 1e-12, "ends at the end time");
+    // plane-strain upsetting, homogeneous: force = (2/√3) σ_y · current width; Table 1
+    // saturates at 130.2 MPa and the width is 20/0.7 mm (incompressible plastic flow; the
+    // elastic volume change of ~1e-3 is within the 1 % tolerance)
+    let ry = header.iter().position(|c| *c == "ry_block_top").unwrap();
+    let expected = 2.0 / 3f64.sqrt() * 130.2 * 20.0 / 0.7;
+    assert!(((-last[ry] - expected) / expected).abs() < 0.01, "top force {} vs {expected}", -last[ry]);
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "completed");
+    assert_eq!(summary["run"]["steps"].as_u64().unwrap() as usize, rows.len());
+}
+
+#[test]
+fn check_reports_bad_input_with_exit_code_2() {
+    let dir = tmpdir("bad");
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[[materials]]\nname = \"m\"\nmodel = \"elastic\"\nyoungs_modulus = -5.0\npoisson_ratio = 0.3\n").unwrap();
+    let o = mpfem().arg("check").arg(&bad).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("youngs_modulus") && err.contains("-5"), "{err}");
+    assert!(!err.contains("panicked"));
+    let o = mpfem().args(["run", "/nonexistent/case.toml"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/case.toml"));
+    let o = mpfem().arg("check").arg("jobs/default.toml").output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn failed_run_exits_1_and_keeps_the_history() {
+    // the default job allowed only 3 steps: it stops with an error after three converged steps
+    let dir = tmpdir("fail");
+    let case = dir.join("fail.toml");
+    let text = std::fs::read_to_string("jobs/default.toml").unwrap();
+    let text = text.replace("[time]", "[time]\nmax_steps = 3");
+    std::fs::write(&case, text).unwrap();
+    let o = mpfem().args(["run", "--quiet"]).arg(&case).arg("--out").arg(&dir).output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "failed");
+    let hist = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    assert_eq!(hist.lines().count(), 4, "header + the 3 converged steps are kept");
+}
