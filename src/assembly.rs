@@ -6,7 +6,7 @@
 //! every floating-point sum is therefore independent of the thread count: 1 and N threads give
 //! bit-identical results.
 
-use crate::element::{self, ElementOut, Volumetric};
+use crate::element::{self, ElementKind, ElementOut, Volumetric, N_ENH};
 use crate::linalg::CsrMatrix;
 use crate::material::{MatState, MaterialError, TimeIncrement};
 use crate::model::Model;
@@ -52,6 +52,8 @@ pub struct ElementFields {
     /// Element pressure (MPa) and area ratio Θ.
     pub pressure: Vec<f64>,
     pub theta: Vec<f64>,
+    /// Enhanced-mode parameters per element (Q1/P0 enhanced only).
+    pub alpha: Vec<[f64; N_ENH]>,
 }
 
 impl ElementFields {
@@ -61,6 +63,7 @@ impl ElementFields {
             sig: vec![[[0.0; 4]; 4]; n_elements],
             pressure: vec![0.0; n_elements],
             theta: vec![1.0; n_elements],
+            alpha: vec![[0.0; N_ENH]; n_elements],
         }
     }
 }
@@ -137,6 +140,7 @@ impl Assembler {
         model: &Model,
         u: &[f64],
         old: &[[MatState; 4]],
+        alpha0: &[[f64; N_ENH]],
         vol: &[Volumetric],
         inc: TimeIncrement,
         mut kk: Option<&mut CsrMatrix>,
@@ -160,8 +164,16 @@ impl Assembler {
                 let xx0 = el.map(|n| model.x0[n]);
                 let ue = el.map(|n| [u[2 * n], u[2 * n + 1]]);
                 let law = &model.materials[model.elem_material[e]];
-                element::evaluate(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], tangent, out)
-                    .map_err(|source| AssemblyError { element: e, source })
+                match model.element {
+                    ElementKind::Q1P0 => element::evaluate(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], tangent, out),
+                    ElementKind::Q1P0Enhanced => {
+                        let mut a = alpha0[e];
+                        let r = element::evaluate_enhanced(law, &xx0, &ue, &old[e], inc, vol[e], tangent, &mut a, out);
+                        out.alpha = a;
+                        r
+                    }
+                }
+                .map_err(|source| AssemblyError { element: e, source })
             };
             let scratch = &mut self.scratch[..len];
             match pool {
@@ -190,6 +202,7 @@ impl Assembler {
                 fields.sig[e] = [out.gauss[0].sig, out.gauss[1].sig, out.gauss[2].sig, out.gauss[3].sig];
                 fields.pressure[e] = out.pressure;
                 fields.theta[e] = out.theta;
+                fields.alpha[e] = out.alpha;
             }
             start = end;
         }

@@ -47,6 +47,7 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
     let model = Model {
         title: "benchmark block".into(),
         formulation: Formulation::UpdatedLagrangian,
+        element: crate::element::ElementKind::Q1P0,
         materials: vec![material.clone()],
         x0: mesh.nodes.clone(),
         elements: mesh.elements.clone(),
@@ -90,6 +91,7 @@ impl Fixture {
                 &self.model,
                 &self.u,
                 &self.old,
+                &vec![[0.0; crate::element::N_ENH]; self.old.len()],
                 &self.vol,
                 TimeIncrement { time: 1.0, dt: 1.0 },
                 Some(&mut self.kk),

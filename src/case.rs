@@ -89,6 +89,8 @@ impl CaseError {
 pub struct Case {
     pub title: String,
     pub formulation: Formulation,
+    /// Element technology (`[model] element`).
+    pub element: crate::element::ElementKind,
     pub materials: Vec<MaterialSpec>,
     pub bodies: Vec<BodySpec>,
     pub boundary: Vec<DirichletSpec>,
@@ -532,6 +534,7 @@ mod raw {
     #[serde(deny_unknown_fields)]
     pub struct Model {
         pub formulation: Option<String>,
+        pub element: Option<String>,
     }
 
     #[derive(Deserialize)]
@@ -882,6 +885,19 @@ impl Cx<'_> {
 
     fn case(&self, r: raw::Case) -> Result<Case, CaseError> {
         let title = r.title.unwrap_or_default();
+        let element = match r.model.as_ref().and_then(|m| m.element.clone()) {
+            None => crate::element::ElementKind::Q1P0,
+            Some(e) => match e.as_str() {
+                "q1p0" => crate::element::ElementKind::Q1P0,
+                "q1p0_enhanced" => crate::element::ElementKind::Q1P0Enhanced,
+                _ => {
+                    return Err(self.err(
+                        "model.element",
+                        format!("value \"{e}\"; expected \"q1p0\" (mean dilatation) or \"q1p0_enhanced\" (mean dilatation + enhanced bending modes)"),
+                    ))
+                }
+            },
+        };
         let formulation = match r.model.and_then(|m| m.formulation) {
             None => Formulation::UpdatedLagrangian,
             Some(f) => match f.as_str() {
@@ -968,6 +984,7 @@ impl Cx<'_> {
         Ok(Case {
             title,
             formulation,
+            element,
             materials,
             bodies,
             boundary,

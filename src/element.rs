@@ -88,6 +88,8 @@ pub struct ElementOut {
     pub pressure: f64,
     /// Area ratio Θ = v_e/V_e.
     pub theta: f64,
+    /// Enhanced-mode parameters (zero for Q1/P0).
+    pub alpha: [f64; N_ENH],
 }
 
 impl Default for ElementOut {
@@ -98,6 +100,7 @@ impl Default for ElementOut {
             gauss: [GaussOut { sig: [0.0; 4], state: MatState::default() }; 4],
             pressure: 0.0,
             theta: 1.0,
+            alpha: [0.0; N_ENH],
         }
     }
 }
@@ -360,4 +363,262 @@ fn add_geometric(kk: &mut [[f64; 8]; 8], dn: &[[f64; 2]; 4], s: &[[f64; 2]; 2], 
             kk[2 * a + 1][2 * b + 1] += gab;
         }
     }
+}
+
+/// Element technology, chosen per case (`[model] element`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ElementKind {
+    /// Q1/P0: bilinear displacement, constant element pressure (mean dilatation). Robust under
+    /// the very large compressions of compaction; stiff in bending on coarse meshes.
+    #[default]
+    Q1P0,
+    /// Q1/P0 with four enhanced (incompatible) deviatoric modes condensed at element level
+    /// (Simo & Armero 1992, Q1/E4): accurate in bending on coarse meshes.
+    Q1P0Enhanced,
+}
+
+/// Number of enhanced modes of [`ElementKind::Q1P0Enhanced`].
+pub const N_ENH: usize = 4;
+
+/// Evaluate the enhanced-strain element (Simo & Armero 1992, "Q1/E4", with the mean-dilatation
+/// pressure of [`evaluate`]).
+///
+/// The deformation gradient at a Gauss point is F = I + ∇₀u + F̃(α) with the enhanced part
+/// `F̃ = (j₀/j(ξ)) M(ξ; α) J₀⁻¹`, M = [[α₁ξ, α₂η], [α₃ξ, α₄η]] (rows: x, y; columns: ξ, η),
+/// J₀ = ∂X/∂ξ and j₀ = det J₀ at the element centre. Because ∫ F̃ dV₀ = j₀ ∫ M dξ J₀⁻¹ = 0, the
+/// element passes the patch test. The internal parameters α solve the element equations
+/// R_α = ∫ S : δE(δα) dV₀ = 0 by a local Newton iteration at fixed u (starting from `alpha`);
+/// the returned stiffness is the condensed K_uu − K_uα K_αα⁻¹ K_αu, the exact derivative of the
+/// internal force with α eliminated.
+///
+/// Both TL and UL requests are computed in the total Lagrangian algebra: each column j of the
+/// 12 generalised degrees of freedom has a gradient variation δFʲ, with
+/// `B_L[:, j] = sym(Fᵀ δFʲ)` (rows δE₁₁, δE₂₂, 2δE₁₂) and `K_NL[i][j] = δFⁱ : (δFʲ S)`.
+/// On return `alpha` holds the solution.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_enhanced(
+    law: &dyn ConstitutiveLaw,
+    xx0: &[[f64; 2]; 4],
+    uu: &[[f64; 2]; 4],
+    old: &[MatState; 4],
+    inc: TimeIncrement,
+    vol: Volumetric,
+    tangent: bool,
+    alpha: &mut [f64; N_ENH],
+    out: &mut ElementOut,
+) -> Result<(), MaterialError> {
+    // volumetric part and pressure: same as the Q1/P0 element (kinematics from displacements)
+    let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
+    let x: [[f64; 2]; 4] = std::array::from_fn(|a| [xc[a][0] + uu[a][0], xc[a][1] + uu[a][1]]);
+    let (vol0, _) = quad_area_grad(&xc);
+    let (_, g) = quad_area_grad(&x);
+    let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
+    let mut dvol = 0.0;
+    for a in 0..4 {
+        let n = (a + 1) % 4;
+        dvol += cross(xc[a], uu[n]) + cross(uu[a], xc[n]) + cross(uu[a], uu[n]);
+    }
+    dvol *= 0.5;
+    let theta = 1.0 + dvol / vol0;
+    if theta <= 0.0 || vol0 <= 0.0 {
+        return Err(MaterialError::InvertedElement(theta));
+    }
+    let ln_t = (dvol / vol0).ln_1p();
+    let p = vol.lambda + vol.kappa * ln_t / theta;
+    let upp = vol.kappa * (1.0 - ln_t) / (theta * theta);
+
+    // centre Jacobian
+    let dn_c = shape_derivs(0.0, 0.0);
+    let mut jc = [[0.0; 2]; 2];
+    for a in 0..4 {
+        for i in 0..2 {
+            for k in 0..2 {
+                jc[i][k] += xx0[a][i] * dn_c[a][k];
+            }
+        }
+    }
+    let (det_jc, jc_inv) = inv2(&jc);
+
+    // per Gauss point geometry (fixed during the local iteration)
+    struct Gp {
+        w0: f64,
+        dn_dx0: [[f64; 2]; 4],
+        /// δF of each enhanced mode per unit α
+        enh: [[[f64; 2]; 2]; N_ENH],
+    }
+    let mut gps: [Gp; 4] = std::array::from_fn(|_| Gp { w0: 0.0, dn_dx0: [[0.0; 2]; 4], enh: [[[0.0; 2]; 2]; N_ENH] });
+    for (q, gp) in GAUSS.iter().enumerate() {
+        let dn = shape_derivs(gp[0], gp[1]);
+        let mut j0 = [[0.0; 2]; 2];
+        for a in 0..4 {
+            for i in 0..2 {
+                for k in 0..2 {
+                    j0[i][k] += xx0[a][i] * dn[a][k];
+                }
+            }
+        }
+        let (det_j0, j0_inv) = inv2(&j0);
+        if det_j0 <= 0.0 {
+            return Err(MaterialError::InvertedElement(det_j0));
+        }
+        for a in 0..4 {
+            for k in 0..2 {
+                gps[q].dn_dx0[a][k] = dn[a][0] * j0_inv[0][k] + dn[a][1] * j0_inv[1][k];
+            }
+        }
+        gps[q].w0 = det_j0;
+        let s = det_jc / det_j0;
+        // M_m: (row, column-in-ξη, value)
+        let modes = [(0usize, 0usize, gp[0]), (0, 1, gp[1]), (1, 0, gp[0]), (1, 1, gp[1])];
+        for (m, &(row, col, v)) in modes.iter().enumerate() {
+            for k in 0..2 {
+                gps[q].enh[m][row][k] = s * v * jc_inv[col][k];
+            }
+        }
+    }
+
+    const NT: usize = 8 + N_ENH;
+    let mut kk = [[0.0; NT]; NT];
+    let mut rr = [0.0; NT];
+    let mut converged = false;
+    let mut ra_prev = f64::INFINITY;
+    for iter in 0..25 {
+        kk = [[0.0; NT]; NT];
+        rr = [0.0; NT];
+        for (q, gp) in gps.iter().enumerate() {
+            let mut f2 = [[1.0, 0.0], [0.0, 1.0]];
+            for a in 0..4 {
+                for i in 0..2 {
+                    for k in 0..2 {
+                        f2[i][k] += uu[a][i] * gp.dn_dx0[a][k];
+                    }
+                }
+            }
+            for m in 0..N_ENH {
+                for i in 0..2 {
+                    for k in 0..2 {
+                        f2[i][k] += alpha[m] * gp.enh[m][i][k];
+                    }
+                }
+            }
+            let (jac, f_inv) = inv2(&f2);
+            if jac <= 0.0 {
+                return Err(MaterialError::InvertedElement(jac));
+            }
+            let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
+            let MatResponse { tau, cc, state } = law.update(&ff, &old[q], inc)?;
+            out.gauss[q] = GaussOut { sig: [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p], state };
+            let t = voigt_congruence(&f_inv);
+            let tau3 = [tau[0], tau[1], tau[2]];
+            let mut s = [0.0; 3];
+            for i in 0..3 {
+                for k in 0..3 {
+                    s[i] += t[i][k] * tau3[k];
+                }
+            }
+            // δF of every generalised dof
+            let mut dfs = [[[0.0; 2]; 2]; NT];
+            for a in 0..4 {
+                for k in 0..2 {
+                    dfs[2 * a][0][k] = gp.dn_dx0[a][k];
+                    dfs[2 * a + 1][1][k] = gp.dn_dx0[a][k];
+                }
+            }
+            dfs[8..].copy_from_slice(&gp.enh);
+            let mut bl = [[0.0; NT]; 3];
+            for j in 0..NT {
+                let d = &dfs[j];
+                bl[0][j] = f2[0][0] * d[0][0] + f2[1][0] * d[1][0];
+                bl[1][j] = f2[0][1] * d[0][1] + f2[1][1] * d[1][1];
+                bl[2][j] = f2[0][0] * d[0][1] + f2[1][0] * d[1][1] + f2[0][1] * d[0][0] + f2[1][1] * d[1][0];
+            }
+            let w0 = gp.w0;
+            for j in 0..NT {
+                rr[j] += w0 * (bl[0][j] * s[0] + bl[1][j] * s[1] + bl[2][j] * s[2]);
+            }
+            let mut tc = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    for k in 0..3 {
+                        tc[i][j] += t[i][k] * cc[k][j];
+                    }
+                }
+            }
+            let mut dd = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    for k in 0..3 {
+                        dd[i][j] += tc[i][k] * t[j][k];
+                    }
+                }
+            }
+            let smat = [[s[0], s[2]], [s[2], s[1]]];
+            for i in 0..NT {
+                let db: [f64; 3] = std::array::from_fn(|r| dd[r][0] * bl[0][i] + dd[r][1] * bl[1][i] + dd[r][2] * bl[2][i]);
+                // δFⁱ S
+                let fs: [[f64; 2]; 2] = std::array::from_fn(|r| std::array::from_fn(|c| dfs[i][r][0] * smat[0][c] + dfs[i][r][1] * smat[1][c]));
+                for j in 0..NT {
+                    let kl = bl[0][j] * db[0] + bl[1][j] * db[1] + bl[2][j] * db[2];
+                    let knl = fs[0][0] * dfs[j][0][0] + fs[0][1] * dfs[j][0][1] + fs[1][0] * dfs[j][1][0] + fs[1][1] * dfs[j][1][1];
+                    kk[i][j] += w0 * (kl + knl);
+                }
+            }
+        }
+        // local equations R_α = 0
+        let ra: [f64; N_ENH] = std::array::from_fn(|m| rr[8 + m]);
+        let scale = rr[..8].iter().map(|v| v.abs()).fold(0.0, f64::max).max(vol.kappa.abs() * 1e-12 * vol0.sqrt());
+        let ra_norm = ra.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        // converged, or stagnating at round-off (Newton converges quadratically here, so a
+        // residual that stops halving is at the floor of the arithmetic)
+        let stagnating = iter > 0 && ra_norm >= 0.5 * ra_prev && ra_norm <= 1e-6 * scale;
+        if ra_norm <= 1e-11 * scale || stagnating {
+            converged = true;
+            break;
+        }
+        ra_prev = ra_norm;
+        let kaa = nalgebra::Matrix4::from_fn(|i, j| kk[8 + i][8 + j]);
+        let Some(inv) = kaa.try_inverse() else {
+            return Err(MaterialError::ReturnMapFailed { iterations: iter, residual: ra_norm });
+        };
+        for m in 0..N_ENH {
+            let mut d = 0.0;
+            for n in 0..N_ENH {
+                d += inv[(m, n)] * ra[n];
+            }
+            alpha[m] -= d;
+        }
+    }
+    if !converged {
+        let ra_norm = (8..NT).map(|m| rr[m].abs()).fold(0.0, f64::max);
+        return Err(MaterialError::ReturnMapFailed { iterations: 25, residual: ra_norm });
+    }
+
+    // condensed force and stiffness + volumetric part
+    out.f_int = std::array::from_fn(|i| rr[i] + p * g[i]);
+    if tangent {
+        let kaa = nalgebra::Matrix4::from_fn(|i, j| kk[8 + i][8 + j]);
+        let inv = kaa.try_inverse().ok_or(MaterialError::ReturnMapFailed { iterations: 0, residual: f64::NAN })?;
+        // K_uα K_αα⁻¹
+        let mut kua_inv = [[0.0; N_ENH]; 8];
+        for i in 0..8 {
+            for n in 0..N_ENH {
+                for m in 0..N_ENH {
+                    kua_inv[i][n] += kk[i][8 + m] * inv[(m, n)];
+                }
+            }
+        }
+        for i in 0..8 {
+            for j in 0..8 {
+                let mut c = 0.0;
+                for n in 0..N_ENH {
+                    c += kua_inv[i][n] * kk[8 + n][j];
+                }
+                out.kk[i][j] = kk[i][j] - c + upp / vol0 * g[i] * g[j];
+            }
+        }
+        add_area_hessian(&mut out.kk, p);
+    }
+    out.pressure = p;
+    out.theta = theta;
+    Ok(())
 }

@@ -56,6 +56,8 @@ pub struct NodeGroup {
 pub struct Model {
     pub title: String,
     pub formulation: Formulation,
+    /// Element technology of every element.
+    pub element: crate::element::ElementKind,
     pub materials: Vec<Material>,
     pub bodies: Vec<Body>,
     /// Reference coordinates of all nodes (mm).
@@ -195,6 +197,7 @@ impl Model {
         Ok(Self {
             title: case.title.clone(),
             formulation: case.formulation,
+            element: case.element,
             materials: case.materials.iter().map(|m| m.material.clone()).collect(),
             bodies,
             x0,

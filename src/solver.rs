@@ -373,6 +373,7 @@ impl Simulation {
             &self.model,
             u,
             &self.sol.fields.states,
+            &self.sol.fields.alpha,
             vol,
             inc,
             kk,

@@ -93,10 +93,20 @@ fn nearest_node(model: &Model, p: [f64; 2]) -> usize {
 /// F = [[1.2, 0.15], [−0.05, 0.9]]: every Gauss point must carry the stress of a single
 /// material point with that F (Hencky deviator + bulk pressure K ln J / J), to 1e-10.
 pub fn patch_test(formulation: Formulation) -> Vec<Row> {
-    let name = format!("patch test ({})", if formulation == Formulation::TotalLagrangian { "TL" } else { "UL" });
+    patch_test_with(formulation, crate::element::ElementKind::Q1P0)
+}
+
+/// [`patch_test`] for a chosen element technology.
+pub fn patch_test_with(formulation: Formulation, element: crate::element::ElementKind) -> Vec<Row> {
+    let name = format!(
+        "patch test ({}{})",
+        if formulation == Formulation::TotalLagrangian { "TL" } else { "UL" },
+        if element == crate::element::ElementKind::Q1P0Enhanced { ", enhanced" } else { "" }
+    );
     let src = "Taylor, Simo & Zienkiewicz 1986; MacNeal & Harder 1985";
     let mut c = verification_case(PATCH);
     c.formulation = formulation;
+    c.element = element;
     let mut model = match Model::from_case(&c) {
         Ok(m) => m,
         Err(e) => return vec![Row::failed(&name, "stress", &e.to_string())],
@@ -215,7 +225,15 @@ pub fn tl_equals_ul() -> Vec<Row> {
 
 /// Tip displacement of Cook's membrane (plane strain, linear regime) for an n × n mesh.
 pub fn cook_tip(n: usize, e: f64, nu: f64, force: f64) -> Result<f64, String> {
+    cook_tip_with(n, e, nu, force, None)
+}
+
+/// [`cook_tip`] with the element technology overridden (`None`: the case file's, enhanced).
+pub fn cook_tip_with(n: usize, e: f64, nu: f64, force: f64, element: Option<crate::element::ElementKind>) -> Result<f64, String> {
     let mut c = verification_case(COOK);
+    if let Some(k) = element {
+        c.element = k;
+    }
     c.bodies[0].divisions = Some([n, n]);
     let scale = 1e-5;
     c.materials[0].material = crate::material::Material::Elastic(crate::material::Elastic::new(e, nu));
@@ -374,6 +392,7 @@ pub fn run_all() -> Vec<Row> {
         rows.extend(patch_test(f));
         rows.extend(rigid_rotation(f));
     }
+    rows.extend(patch_test_with(Formulation::UpdatedLagrangian, crate::element::ElementKind::Q1P0Enhanced));
     rows.extend(tl_equals_ul());
     rows.extend(cook_membrane(64));
     rows.extend(thick_cylinder());

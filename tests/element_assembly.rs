@@ -8,7 +8,7 @@
 
 use mpfem::bench_support::{assembly_fixture, Law};
 use mpfem::case::Formulation;
-use mpfem::element::{evaluate, ElementOut, Volumetric};
+use mpfem::element::{evaluate, evaluate_enhanced, ElementOut, Volumetric};
 use mpfem::material::{ConstitutiveLaw, Elastic, HardeningTable, J2Plastic, MatState, Material, TimeIncrement};
 
 fn fd_check(formulation: Formulation, law: &Material, vol: Volumetric, uu: [[f64; 2]; 4]) -> f64 {
@@ -74,5 +74,42 @@ fn assembly_is_identical_on_one_and_two_threads() {
         assert_eq!(one.f_int, two.f_int, "{law:?}: internal forces differ");
         assert_eq!(one.kk.values, two.kk.values, "{law:?}: tangents differ");
         assert!(one.f_int.iter().any(|v| v.abs() > 1.0), "the fixture must be loaded");
+    }
+}
+
+/// The condensed tangent of the enhanced element (α eliminated at element level) is the exact
+/// derivative of its internal force: central differences, 1e-6 relative.
+#[test]
+fn enhanced_element_condensed_tangent_matches_finite_differences() {
+    let xx0 = [[0.0, 0.0], [1.0, 0.1], [1.1, 1.0], [-0.1, 0.9]];
+    let uu = [[0.0, 0.0], [0.12, 0.05], [0.02, 0.15], [-0.08, 0.03]];
+    let old = [MatState::default(); 4];
+    let inc = TimeIncrement { time: 1.0, dt: 1.0 };
+    let e = 64100.0;
+    let j2 = Material::J2(J2Plastic::new(e, 0.3, HardeningTable::perfect(130.0)));
+    for (law, uu) in [(Material::Elastic(Elastic::new(e, 0.3)), uu), (j2, uu.map(|p| [0.02 * p[0], 0.02 * p[1]]))] {
+        let vol = Volumetric { kappa: law.bulk_modulus().unwrap(), lambda: 0.0 };
+        let mut out = ElementOut::default();
+        let mut alpha = [0.0; 4];
+        evaluate_enhanced(&law, &xx0, &uu, &old, inc, vol, true, &mut alpha, &mut out).unwrap();
+        assert!(alpha.iter().any(|a| a.abs() > 1e-8), "the enhanced modes must be active: {alpha:?}");
+        let scale = out.kk.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+        let h = 1e-7;
+        let mut worst: f64 = 0.0;
+        for j in 0..8 {
+            let (a, c) = (j / 2, j % 2);
+            let (mut up, mut dn) = (uu, uu);
+            up[a][c] += h;
+            dn[a][c] -= h;
+            let (mut op, mut om) = (ElementOut::default(), ElementOut::default());
+            let (mut ap, mut am) = (alpha, alpha);
+            evaluate_enhanced(&law, &xx0, &up, &old, inc, vol, false, &mut ap, &mut op).unwrap();
+            evaluate_enhanced(&law, &xx0, &dn, &old, inc, vol, false, &mut am, &mut om).unwrap();
+            for i in 0..8 {
+                let fd = (op.f_int[i] - om.f_int[i]) / (2.0 * h);
+                worst = worst.max((fd - out.kk[i][j]).abs() / scale);
+            }
+        }
+        assert!(worst < 1e-6, "{law:?}: {worst:e}");
     }
 }
