@@ -1,6 +1,10 @@
 //! One linear solve of the tangent of our own assembly (320 × 320 elastic block, 205 440 free
-//! unknowns): our LU, Cholesky and PCG wrappers (numeric factorisation + solve, symbolic
-//! analysis reused as in a Newton loop) against bare faer calls on the same matrix.
+//! unknowns), all sequential (faer's global parallelism is set to `Par::Seq`, our solvers get
+//! 1 thread):
+//! - `ours_*`: numeric factorisation + solve with the symbolic analysis reused, as in a Newton
+//!   loop;
+//! - `ours_*_with_analysis`: analysis + factorisation + solve, the same work as
+//! - `bare_faer_*`: `sp_lu` / `sp_cholesky` + solve called directly on the same matrix.
 //! Run: `cargo bench --bench solve`.
 use criterion::{criterion_group, criterion_main, Criterion};
 use mpfem::bench_support::{assembly_fixture, Law};
@@ -8,6 +12,7 @@ use mpfem::linalg::{direct, make_solver, LinearSolverKind, Preconditioner, Solve
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
+    faer::set_global_parallelism(faer::Par::Seq);
     let mut fx = assembly_fixture(320, Law::Elastic, 2);
     fx.assemble();
     let (kk, b) = fx.system();
@@ -27,6 +32,17 @@ fn bench(c: &mut Criterion) {
                 black_box(&x);
             })
         });
+        if kind != LinearSolverKind::Pcg {
+            g.bench_function(format!("ours_{kind:?}_with_analysis"), |bn| {
+                bn.iter(|| {
+                    let mut s = make_solver(&opts);
+                    s.analyze(&kk).expect("analyze");
+                    s.factor(&kk).expect("factor");
+                    s.solve(&kk, &b, &mut x).expect("solve");
+                    black_box(&x);
+                })
+            });
+        }
     }
     g.bench_function("bare_faer_lu", |bn| bn.iter(|| black_box(direct::bare_faer_lu_solve(&kk, &b))));
     g.bench_function("bare_faer_cholesky", |bn| bn.iter(|| black_box(direct::bare_faer_cholesky_solve(&kk, &b))));

@@ -1,10 +1,11 @@
 //! Degree-of-freedom numbering, the sparsity pattern (built once per topology) and the
 //! parallel assembly of internal forces and tangent stiffness.
 //!
-//! Elements are evaluated in parallel (rayon, on a pool the caller passes in, or sequentially)
-//! in fixed-size chunks, then scattered into the global matrix in element order. The order of
-//! every floating-point sum is therefore independent of the thread count: 1 and N threads give
-//! bit-identical results.
+//! Elements are coloured once per topology so that no two elements of one colour share a node.
+//! Colours are processed one after the other; inside a colour the elements are evaluated and
+//! scattered in parallel (rayon, on a pool the caller passes in, or sequentially) without any
+//! write conflict. Every matrix or vector entry therefore receives its contributions in colour
+//! order, whatever the thread count: 1 and N threads give bit-identical results.
 
 use crate::element::{self, ElementKind, ElementOut, Volumetric, N_ENH};
 use crate::linalg::CsrMatrix;
@@ -16,8 +17,6 @@ use thiserror::Error;
 /// Marker for a constrained degree of freedom in the equation map.
 pub const FIXED: usize = usize::MAX;
 
-/// Elements evaluated in parallel before each sequential scatter.
-const CHUNK: usize = 2048;
 
 #[derive(Debug, Error, Clone, PartialEq)]
 #[error("element {element}: {source}")]
@@ -77,8 +76,46 @@ pub struct Assembler {
     /// Equation map.
     pub eq: Vec<usize>,
     pub n_free: usize,
-    scratch: Vec<ElementOut>,
+    /// Element colours: no two elements of one colour share a node.
+    pub colors: Vec<Vec<usize>>,
 }
+
+/// Greedy colouring of the elements so that elements sharing a node get different colours.
+pub fn color_elements(elements: &[[usize; 4]], n_nodes: usize) -> Vec<Vec<usize>> {
+    let mut node_colors: Vec<u64> = vec![0; n_nodes]; // bit c set: a colour-c element touches the node
+    let mut colors: Vec<Vec<usize>> = Vec::new();
+    let mut wide: Vec<Vec<usize>> = vec![Vec::new(); n_nodes]; // colours ≥ 64 (rare)
+    for (e, el) in elements.iter().enumerate() {
+        let mut used = 0u64;
+        for &n in el {
+            used |= node_colors[n];
+        }
+        let c = if used != u64::MAX {
+            (!used).trailing_zeros() as usize
+        } else {
+            (64..).find(|c| el.iter().all(|&n| !wide[n].contains(c))).unwrap_or(64)
+        };
+        for &n in el {
+            if c < 64 {
+                node_colors[n] |= 1 << c;
+            } else {
+                wide[n].push(c);
+            }
+        }
+        if colors.len() <= c {
+            colors.resize_with(c + 1, Vec::new);
+        }
+        colors[c].push(e);
+    }
+    colors
+}
+
+/// Raw shared pointer for the conflict-free parallel scatter of one colour.
+#[derive(Clone, Copy)]
+struct SharedMut<T>(*mut T);
+// SAFETY: only used inside one colour, whose elements touch pairwise disjoint entries.
+unsafe impl<T> Send for SharedMut<T> {}
+unsafe impl<T> Sync for SharedMut<T> {}
 
 impl Assembler {
     /// Build the equation numbering and the free–free sparsity pattern.
@@ -127,8 +164,8 @@ impl Assembler {
                 s
             })
             .collect();
-        let scratch = vec![ElementOut::default(); CHUNK.min(model.elements.len().max(1))];
-        (Self { elem_dofs, scatter, eq, n_free, scratch }, kk)
+        let colors = color_elements(&model.elements, model.n_nodes());
+        (Self { elem_dofs, scatter, eq, n_free, colors }, kk)
     }
 
     /// Assemble the internal force `f_int` (all dofs, N/mm) and, if `kk` is given, the tangent
@@ -153,58 +190,64 @@ impl Assembler {
             k.fill_zero();
         }
         let tangent = kk.is_some();
-        let ne = model.elements.len();
-        let mut start = 0;
-        while start < ne {
-            let end = (start + CHUNK).min(ne);
-            let len = end - start;
-            let work = |(i, out): (usize, &mut ElementOut)| -> Result<(), AssemblyError> {
-                let e = start + i;
-                let el = &model.elements[e];
-                let xx0 = el.map(|n| model.x0[n]);
-                let ue = el.map(|n| [u[2 * n], u[2 * n + 1]]);
-                let law = &model.materials[model.elem_material[e]];
-                match model.element {
-                    ElementKind::Q1P0 => element::evaluate(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], tangent, out),
-                    ElementKind::Q1P0Enhanced => {
-                        let mut a = alpha0[e];
-                        let r = element::evaluate_enhanced(law, &xx0, &ue, &old[e], inc, vol[e], tangent, &mut a, out);
-                        out.alpha = a;
-                        r
-                    }
+        let f_ptr = SharedMut(f_int.as_mut_ptr());
+        let k_ptr = SharedMut(kk.map_or(std::ptr::null_mut(), |k| k.values.as_mut_ptr()));
+        let states = SharedMut(fields.states.as_mut_ptr());
+        let sig = SharedMut(fields.sig.as_mut_ptr());
+        let pressure = SharedMut(fields.pressure.as_mut_ptr());
+        let theta = SharedMut(fields.theta.as_mut_ptr());
+        let alpha = SharedMut(fields.alpha.as_mut_ptr());
+        let elem_dofs = &self.elem_dofs;
+        let scatter = &self.scatter;
+        let work = |&e: &usize| -> Result<(), AssemblyError> {
+            let (f_ptr, k_ptr, states, sig, pressure, theta, alpha) = (f_ptr, k_ptr, states, sig, pressure, theta, alpha);
+            let mut out = ElementOut::default();
+            let el = &model.elements[e];
+            let xx0 = el.map(|n| model.x0[n]);
+            let ue = el.map(|n| [u[2 * n], u[2 * n + 1]]);
+            let law = &model.materials[model.elem_material[e]];
+            match model.element {
+                ElementKind::Q1P0 => element::evaluate(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], tangent, &mut out),
+                ElementKind::Q1P0Enhanced => {
+                    let mut a = alpha0[e];
+                    let r = element::evaluate_enhanced(law, &xx0, &ue, &old[e], inc, vol[e], tangent, &mut a, &mut out);
+                    out.alpha = a;
+                    r
                 }
-                .map_err(|source| AssemblyError { element: e, source })
-            };
-            let scratch = &mut self.scratch[..len];
-            match pool {
-                Some(p) => p.install(|| scratch.par_iter_mut().enumerate().try_for_each(work))?,
-                None => scratch.iter_mut().enumerate().try_for_each(work)?,
             }
-            // sequential scatter in element order (deterministic sums)
-            for (i, out) in scratch.iter().enumerate() {
-                let e = start + i;
-                let dofs = &self.elem_dofs[e];
+            .map_err(|source| AssemblyError { element: e, source })?;
+            // SAFETY: the elements of one colour share no node, hence no dof, no matrix entry
+            // and no element slot; colours are processed one after the other.
+            unsafe {
+                let dofs = &elem_dofs[e];
                 for a in 0..8 {
-                    f_int[dofs[a]] += out.f_int[a];
+                    *f_ptr.0.add(dofs[a]) += out.f_int[a];
                 }
-                if let Some(k) = kk.as_deref_mut() {
-                    let s = &self.scatter[e];
+                if tangent {
+                    let s = &scatter[e];
                     for a in 0..8 {
                         for b in 0..8 {
                             let pos = s[8 * a + b];
                             if pos != u32::MAX {
-                                k.values[pos as usize] += out.kk[a][b];
+                                *k_ptr.0.add(pos as usize) += out.kk[a][b];
                             }
                         }
                     }
                 }
-                fields.states[e] = [out.gauss[0].state, out.gauss[1].state, out.gauss[2].state, out.gauss[3].state];
-                fields.sig[e] = [out.gauss[0].sig, out.gauss[1].sig, out.gauss[2].sig, out.gauss[3].sig];
-                fields.pressure[e] = out.pressure;
-                fields.theta[e] = out.theta;
-                fields.alpha[e] = out.alpha;
+                let g = &out.gauss;
+                *states.0.add(e) = [g[0].state, g[1].state, g[2].state, g[3].state];
+                *sig.0.add(e) = [g[0].sig, g[1].sig, g[2].sig, g[3].sig];
+                *pressure.0.add(e) = out.pressure;
+                *theta.0.add(e) = out.theta;
+                *alpha.0.add(e) = out.alpha;
             }
-            start = end;
+            Ok(())
+        };
+        for color in &self.colors {
+            match pool {
+                Some(p) => p.install(|| color.par_iter().with_min_len(64).try_for_each(work))?,
+                None => color.iter().try_for_each(work)?,
+            }
         }
         Ok(())
     }

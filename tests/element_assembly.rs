@@ -113,3 +113,35 @@ fn enhanced_element_condensed_tangent_matches_finite_differences() {
         assert!(worst < 1e-6, "{law:?}: {worst:e}");
     }
 }
+
+/// The element colouring is valid: no two elements of one colour share a node, every element
+/// has exactly one colour, and a structured quad mesh needs only 4 colours.
+#[test]
+fn element_colouring_is_conflict_free() {
+    let mesh = mpfem::mesh::shapes::rectangle([0.0, 0.0], 10.0, 7.0, 10, 7);
+    let colors = mpfem::assembly::color_elements(&mesh.elements, mesh.nodes.len());
+    assert_eq!(colors.len(), 4);
+    let mut seen = vec![0; mesh.elements.len()];
+    for c in &colors {
+        let mut touched = vec![false; mesh.nodes.len()];
+        for &e in c {
+            seen[e] += 1;
+            for &n in &mesh.elements[e] {
+                assert!(!touched[n], "two elements of one colour share node {n}");
+                touched[n] = true;
+            }
+        }
+    }
+    assert!(seen.iter().all(|&k| k == 1));
+    let disc = mpfem::mesh::shapes::disc([0.0, 0.0], 5.0, 0.7);
+    let colors = mpfem::assembly::color_elements(&disc.elements, disc.nodes.len());
+    for c in &colors {
+        let mut touched = vec![false; disc.nodes.len()];
+        for &e in c {
+            for &n in &disc.elements[e] {
+                assert!(!touched[n]);
+                touched[n] = true;
+            }
+        }
+    }
+}
