@@ -147,6 +147,89 @@ fn inv2(m: &[[f64; 2]; 2]) -> (f64, [[f64; 2]; 2]) {
     (det, [[m[1][1] * id, -m[0][1] * id], [-m[1][0] * id, m[0][0] * id]])
 }
 
+/// The mean-dilatation volumetric part shared by both element technologies.
+struct VolumetricPart {
+    /// Reference area V_e (mm²).
+    vol0: f64,
+    /// g = ∂v_e/∂x.
+    g: [f64; 8],
+    /// Θ = v_e / V_e.
+    theta: f64,
+    /// Element pressure p = λ_e + κ ln Θ / Θ (MPa).
+    p: f64,
+    /// U″(Θ) = κ (1 − ln Θ) / Θ².
+    upp: f64,
+}
+
+impl VolumetricPart {
+    /// Areas from coordinates relative to node 0 and v − V from the displacements, so that
+    /// neither the shoelace sums nor ln Θ lose tiny strains to round-off.
+    fn new(xx0: &[[f64; 2]; 4], uu: &[[f64; 2]; 4], vol: Volumetric) -> Result<Self, MaterialError> {
+        let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
+        let x: [[f64; 2]; 4] = std::array::from_fn(|a| [xc[a][0] + uu[a][0], xc[a][1] + uu[a][1]]);
+        let (vol0, _) = quad_area_grad(&xc);
+        let (_, g) = quad_area_grad(&x);
+        // v − V = ½ Σ (X_a × u_{a+1} + u_a × X_{a+1} + u_a × u_{a+1})
+        let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
+        let mut dvol = 0.0;
+        for a in 0..4 {
+            let n = (a + 1) % 4;
+            dvol += cross(xc[a], uu[n]) + cross(uu[a], xc[n]) + cross(uu[a], uu[n]);
+        }
+        dvol *= 0.5;
+        let theta = 1.0 + dvol / vol0;
+        if theta <= 0.0 || vol0 <= 0.0 {
+            return Err(MaterialError::InvertedElement(theta));
+        }
+        let ln_t = (dvol / vol0).ln_1p();
+        let p = vol.lambda + vol.kappa * ln_t / theta;
+        let upp = vol.kappa * (1.0 - ln_t) / (theta * theta);
+        Ok(Self { vol0, g, theta, p, upp })
+    }
+
+    /// f += p g and, with a tangent, K += (U″/V) g gᵀ + p H.
+    fn add_to(&self, f: &mut [f64; 8], kk: Option<&mut [[f64; 8]; 8]>) {
+        for i in 0..8 {
+            f[i] += self.p * self.g[i];
+        }
+        if let Some(kk) = kk {
+            let s = self.upp / self.vol0;
+            for i in 0..8 {
+                for j in 0..8 {
+                    kk[i][j] += s * self.g[i] * self.g[j];
+                }
+            }
+            add_area_hessian(kk, self.p);
+        }
+    }
+}
+
+/// D = T c Tᵀ: the spatial tangent pulled back to the material tangent ∂S/∂E.
+fn pull_back_tangent(t: &[[f64; 3]; 3], cc: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut tc = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            for k in 0..3 {
+                tc[i][j] += t[i][k] * cc[k][j];
+            }
+        }
+    }
+    let mut dd = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            for k in 0..3 {
+                dd[i][j] += tc[i][k] * t[j][k];
+            }
+        }
+    }
+    dd
+}
+
+/// S = T τ̂ (Voigt), the second Piola–Kirchhoff stress from the Kirchhoff stress.
+fn pull_back_stress(t: &[[f64; 3]; 3], tau: &[f64; 4]) -> [f64; 3] {
+    std::array::from_fn(|i| t[i][0] * tau[0] + t[i][1] * tau[1] + t[i][2] * tau[2])
+}
+
 /// Evaluate one element.
 ///
 /// - `xx0`: reference nodal coordinates; `uu`: nodal displacements (mm). Kinematics are
@@ -174,40 +257,11 @@ pub fn evaluate(
     }
 
     // --- volumetric part (mean dilatation) ---
-    // coordinates relative to node 0, so the shoelace sums do not cancel large numbers
-    let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
-    let x: [[f64; 2]; 4] = std::array::from_fn(|a| [xc[a][0] + uu[a][0], xc[a][1] + uu[a][1]]);
-    let (vol0, _) = quad_area_grad(&xc);
-    let (_, g) = quad_area_grad(&x);
-    // v − V = ½ Σ (X_a × u_{a+1} + u_a × X_{a+1} + u_a × u_{a+1})
-    let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
-    let mut dvol = 0.0;
-    for a in 0..4 {
-        let n = (a + 1) % 4;
-        dvol += cross(xc[a], uu[n]) + cross(uu[a], xc[n]) + cross(uu[a], uu[n]);
-    }
-    dvol *= 0.5;
-    let theta = 1.0 + dvol / vol0;
-    if theta <= 0.0 || vol0 <= 0.0 {
-        return Err(MaterialError::InvertedElement(theta));
-    }
-    let ln_t = (dvol / vol0).ln_1p();
-    let p = vol.lambda + vol.kappa * ln_t / theta;
-    let upp = vol.kappa * (1.0 - ln_t) / (theta * theta);
-    for i in 0..8 {
-        out.f_int[i] += p * g[i];
-    }
-    if tangent {
-        let s = upp / vol0;
-        for i in 0..8 {
-            for j in 0..8 {
-                out.kk[i][j] += s * g[i] * g[j];
-            }
-        }
-        add_area_hessian(&mut out.kk, p);
-    }
+    let vp = VolumetricPart::new(xx0, uu, vol)?;
+    vp.add_to(&mut out.f_int, if tangent { Some(&mut out.kk) } else { None });
+    let p = vp.p;
     out.pressure = p;
-    out.theta = theta;
+    out.theta = vp.theta;
 
     // --- deviatoric part, Gauss loop ---
     for (q, gp) in GAUSS.iter().enumerate() {
@@ -258,13 +312,7 @@ pub fn evaluate(
             Formulation::TotalLagrangian => {
                 // S = F⁻¹ τ′ F⁻ᵀ, D = T c Tᵀ with T the congruence by F⁻¹
                 let t = voigt_congruence(&f_inv);
-                let tau3 = [tau[0], tau[1], tau[2]];
-                let mut s = [0.0; 3];
-                for i in 0..3 {
-                    for k in 0..3 {
-                        s[i] += t[i][k] * tau3[k];
-                    }
-                }
+                let s = pull_back_stress(&t, &tau);
                 // ₀B_L for node a: rows δE11, δE22, 2δE12; cols (u_a, v_a)
                 let mut bl = [[0.0; 8]; 3];
                 for a in 0..4 {
@@ -280,23 +328,7 @@ pub fn evaluate(
                     out.f_int[i] += w0 * (bl[0][i] * s[0] + bl[1][i] * s[1] + bl[2][i] * s[2]);
                 }
                 if tangent {
-                    // D = T c Tᵀ
-                    let mut tc = [[0.0; 3]; 3];
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            for k in 0..3 {
-                                tc[i][j] += t[i][k] * cc[k][j];
-                            }
-                        }
-                    }
-                    let mut dd = [[0.0; 3]; 3];
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            for k in 0..3 {
-                                dd[i][j] += tc[i][k] * t[j][k];
-                            }
-                        }
-                    }
+                    let dd = pull_back_tangent(&t, &cc);
                     add_bt_d_b(&mut out.kk, &bl, &dd, w0);
                     add_geometric(&mut out.kk, &dn_dx0, &[[s[0], s[2]], [s[2], s[1]]], w0);
                 }
@@ -407,25 +439,9 @@ pub fn evaluate_enhanced(
     alpha: &mut [f64; N_ENH],
     out: &mut ElementOut,
 ) -> Result<(), MaterialError> {
-    // volumetric part and pressure: same as the Q1/P0 element (kinematics from displacements)
-    let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
-    let x: [[f64; 2]; 4] = std::array::from_fn(|a| [xc[a][0] + uu[a][0], xc[a][1] + uu[a][1]]);
-    let (vol0, _) = quad_area_grad(&xc);
-    let (_, g) = quad_area_grad(&x);
-    let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
-    let mut dvol = 0.0;
-    for a in 0..4 {
-        let n = (a + 1) % 4;
-        dvol += cross(xc[a], uu[n]) + cross(uu[a], xc[n]) + cross(uu[a], uu[n]);
-    }
-    dvol *= 0.5;
-    let theta = 1.0 + dvol / vol0;
-    if theta <= 0.0 || vol0 <= 0.0 {
-        return Err(MaterialError::InvertedElement(theta));
-    }
-    let ln_t = (dvol / vol0).ln_1p();
-    let p = vol.lambda + vol.kappa * ln_t / theta;
-    let upp = vol.kappa * (1.0 - ln_t) / (theta * theta);
+    // volumetric part and pressure: same as the Q1/P0 element
+    let vp = VolumetricPart::new(xx0, uu, vol)?;
+    let p = vp.p;
 
     // centre Jacobian
     let dn_c = shape_derivs(0.0, 0.0);
@@ -509,13 +525,7 @@ pub fn evaluate_enhanced(
             let MatResponse { tau, cc, state } = law.update(&ff, &old[q], inc)?;
             out.gauss[q] = GaussOut { sig: [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p], state };
             let t = voigt_congruence(&f_inv);
-            let tau3 = [tau[0], tau[1], tau[2]];
-            let mut s = [0.0; 3];
-            for i in 0..3 {
-                for k in 0..3 {
-                    s[i] += t[i][k] * tau3[k];
-                }
-            }
+            let s = pull_back_stress(&t, &tau);
             // δF of every generalised dof
             let mut dfs = [[[0.0; 2]; 2]; NT];
             for a in 0..4 {
@@ -536,22 +546,7 @@ pub fn evaluate_enhanced(
             for j in 0..NT {
                 rr[j] += w0 * (bl[0][j] * s[0] + bl[1][j] * s[1] + bl[2][j] * s[2]);
             }
-            let mut tc = [[0.0; 3]; 3];
-            for i in 0..3 {
-                for j in 0..3 {
-                    for k in 0..3 {
-                        tc[i][j] += t[i][k] * cc[k][j];
-                    }
-                }
-            }
-            let mut dd = [[0.0; 3]; 3];
-            for i in 0..3 {
-                for j in 0..3 {
-                    for k in 0..3 {
-                        dd[i][j] += tc[i][k] * t[j][k];
-                    }
-                }
-            }
+            let dd = pull_back_tangent(&t, &cc);
             let smat = [[s[0], s[2]], [s[2], s[1]]];
             for i in 0..NT {
                 let db: [f64; 3] = std::array::from_fn(|r| dd[r][0] * bl[0][i] + dd[r][1] * bl[1][i] + dd[r][2] * bl[2][i]);
@@ -566,7 +561,7 @@ pub fn evaluate_enhanced(
         }
         // local equations R_α = 0
         let ra: [f64; N_ENH] = std::array::from_fn(|m| rr[8 + m]);
-        let scale = rr[..8].iter().map(|v| v.abs()).fold(0.0, f64::max).max(vol.kappa.abs() * 1e-12 * vol0.sqrt());
+        let scale = rr[..8].iter().map(|v| v.abs()).fold(0.0, f64::max).max(vol.kappa.abs() * 1e-12 * vp.vol0.sqrt());
         let ra_norm = ra.iter().map(|v| v.abs()).fold(0.0, f64::max);
         // converged, or stagnating at round-off (Newton converges quadratically here, so a
         // residual that stops halving is at the floor of the arithmetic)
@@ -594,11 +589,11 @@ pub fn evaluate_enhanced(
     }
 
     // condensed force and stiffness + volumetric part
-    out.f_int = std::array::from_fn(|i| rr[i] + p * g[i]);
+    out.f_int = std::array::from_fn(|i| rr[i]);
     if tangent {
         let kaa = nalgebra::Matrix4::from_fn(|i, j| kk[8 + i][8 + j]);
         let inv = kaa.try_inverse().ok_or(MaterialError::ReturnMapFailed { iterations: 0, residual: f64::NAN })?;
-        // K_uα K_αα⁻¹
+        // K_uu − (K_uα K_αα⁻¹) K_αu
         let mut kua_inv = [[0.0; N_ENH]; 8];
         for i in 0..8 {
             for n in 0..N_ENH {
@@ -613,12 +608,12 @@ pub fn evaluate_enhanced(
                 for n in 0..N_ENH {
                     c += kua_inv[i][n] * kk[8 + n][j];
                 }
-                out.kk[i][j] = kk[i][j] - c + upp / vol0 * g[i] * g[j];
+                out.kk[i][j] = kk[i][j] - c;
             }
         }
-        add_area_hessian(&mut out.kk, p);
     }
+    vp.add_to(&mut out.f_int, if tangent { Some(&mut out.kk) } else { None });
     out.pressure = p;
-    out.theta = theta;
+    out.theta = vp.theta;
     Ok(())
 }

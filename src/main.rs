@@ -73,6 +73,13 @@ fn main() -> ExitCode {
         Command::Check { case } => match case::load(&case) {
             Ok(c) => match Model::from_case(&c) {
                 Ok(m) => {
+                    let (mut min_sj, mut max_ar, mut inverted) = (f64::INFINITY, 0.0f64, 0usize);
+                    for b in &m.bodies {
+                        let q = mpfem::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
+                        min_sj = min_sj.min(q.min_scaled_jacobian);
+                        max_ar = max_ar.max(q.max_aspect_ratio);
+                        inverted += q.n_inverted;
+                    }
                     println!(
                         "{}: OK — \"{}\": {} material(s), {} body(ies), {} nodes, {} elements, {} prescribed dofs, {} load(s), end time {} s",
                         case.display(),
@@ -85,6 +92,11 @@ fn main() -> ExitCode {
                         m.loads.len(),
                         c.time.end
                     );
+                    println!("mesh quality: min scaled Jacobian {min_sj:.3}, max aspect ratio {max_ar:.2}, {inverted} inverted element(s)");
+                    if inverted > 0 {
+                        eprintln!("error: {}: the mesh has {inverted} inverted element(s)", case.display());
+                        return ExitCode::from(2);
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
