@@ -1,0 +1,1 @@
+//! Contact kernels (being written).

@@ -1,0 +1,18 @@
+//! Contact between particles and with rigid walls (work in progress for the contact issue).
+//!
+//! Lifecycle (after LLNL Tribol): *search* finds candidate pairs conservatively within a stated
+//! distance ([`search`]); the pairs are frozen for a Newton solve; the *kernels* compute the gap,
+//! normal and slip of each pair and its residual and consistent tangent ([`kernels`]);
+//! enforcement (penalty, augmented Lagrangian, Lagrange multipliers) and friction live in the
+//! kernels, the driver only assembles them.
+
+pub mod kernels;
+pub mod search;
+
+/// A boundary segment of a body: global node indices `[a, b]`, oriented so that the body lies on
+/// its left (outward normal = (Δy, −Δx)/ℓ).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Segment {
+    pub body: usize,
+    pub nodes: [usize; 2],
+}

@@ -1,0 +1,1 @@
+//! Contact search (being written).
