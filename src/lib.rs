@@ -29,5 +29,6 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod packing;
 pub mod solver;
 pub mod verify;
