@@ -422,6 +422,16 @@ impl Simulation {
         for p in &self.model.prescribed {
             u[p.dof] = p.value * self.model.amplitude(p.amplitude, t);
         }
+        if self.dt_prev == 0.0 {
+            // no increment to extrapolate (first step): linearised prediction instead
+            if let Err(e) = self.tangent_predictor(&mut u, inc) {
+                tracing::debug!(%e, "tangent predictor skipped");
+                u.copy_from_slice(&self.sol.u);
+                for p in &self.model.prescribed {
+                    u[p.dof] = p.value * self.model.amplitude(p.amplitude, t);
+                }
+            }
+        }
         let mut lambda = self.sol.lambda.clone();
         let mut iterations = 0;
         let mut updates = 0;
@@ -464,6 +474,43 @@ impl Simulation {
             }
             updates += 1;
         }
+    }
+
+    /// Linearised step prediction from the committed state: with K the tangent at u_n,
+    /// `K_ff Δu_f = F_ext(t_{n+1}) − F_int(u_n) − K_fc Δu_c`, where the coupling to the
+    /// prescribed increments Δu_c is the directional derivative of F_int along Δu_c (a forward
+    /// difference with a step of 1e-6 Δu_c: accurate to ~1e-6, plenty for a predictor).
+    /// On entry `u` holds u_n on free dofs and the new prescribed values; on success the free
+    /// dofs hold the prediction.
+    fn tangent_predictor(&mut self, u: &mut [f64], inc: TimeIncrement) -> Result<(), NewtonFailure> {
+        let n_free = self.assembler.n_free;
+        if n_free == 0 {
+            return Ok(());
+        }
+        let u_n = self.sol.u.clone();
+        let du_c: Vec<f64> = u.iter().zip(&u_n).map(|(a, b)| a - b).collect();
+        let vol = self.volumetric(&self.sol.lambda.clone());
+        // K and F_int at u_n (with the loads of t_{n+1})
+        self.evaluate(&u_n, inc, &vol, true)?;
+        let f0 = self.f_int.clone();
+        let r0 = self.r.clone(); // F_ext(t_{n+1}) − F_int(u_n) on free dofs
+        self.factor()?;
+        let eps = 1e-6;
+        let u_eps: Vec<f64> = u_n.iter().zip(&du_c).map(|(a, d)| a + eps * d).collect();
+        self.evaluate(&u_eps, inc, &vol, false)?;
+        for (d, &q) in self.assembler.eq.iter().enumerate() {
+            if q != FIXED {
+                self.r[q] = r0[q] - (self.f_int[d] - f0[d]) / eps;
+            }
+        }
+        self.du.iter_mut().for_each(|v| *v = 0.0);
+        self.linear.solve(&self.kk, &self.r, &mut self.du).map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+        for (d, &q) in self.assembler.eq.iter().enumerate() {
+            if q != FIXED {
+                u[d] = u_n[d] + self.du[q];
+            }
+        }
+        Ok(())
     }
 
     /// Newton–Raphson at fixed multipliers. Returns (iterations, final relative residual).
