@@ -120,6 +120,12 @@ unsafe impl<T> Sync for SharedMut<T> {}
 impl Assembler {
     /// Build the equation numbering and the free–free sparsity pattern.
     pub fn new(model: &Model, eq: Vec<usize>, n_free: usize) -> (Self, CsrMatrix) {
+        Self::with_couplings(model, eq, n_free, &[])
+    }
+
+    /// As [`Assembler::new`], with extra node groups (e.g. contact pairs: slave node and the
+    /// two nodes of its master segment) whose dofs the pattern must couple.
+    pub fn with_couplings(model: &Model, eq: Vec<usize>, n_free: usize, extra: &[[usize; 3]]) -> (Self, CsrMatrix) {
         let elem_dofs: Vec<[usize; 8]> = model
             .elements
             .iter()
@@ -139,6 +145,19 @@ impl Assembler {
                     continue;
                 }
                 for &j in d {
+                    if eq[j] != FIXED {
+                        rows[eq[i]].push(eq[j]);
+                    }
+                }
+            }
+        }
+        for g in extra {
+            let dofs: Vec<usize> = g.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
+            for &i in &dofs {
+                if eq[i] == FIXED {
+                    continue;
+                }
+                for &j in &dofs {
                     if eq[j] != FIXED {
                         rows[eq[i]].push(eq[j]);
                     }

@@ -98,6 +98,11 @@ pub struct Case {
     pub time: TimeSpec,
     pub solver: SolverSpec,
     pub output: OutputSpec,
+    /// Rigid walls (empty: no walls).
+    pub walls: Vec<WallSpec>,
+    /// Contact settings (used when there are walls or several bodies).
+    pub contact: ContactSpec,
+    pub stop: StopSpec,
     /// Directory of the case file; relative paths in the file are resolved against it.
     pub base_dir: PathBuf,
 }
@@ -110,6 +115,77 @@ pub enum Formulation {
     /// Updated Lagrangian (current configuration), paper eq. 12–17.
     #[default]
     UpdatedLagrangian,
+}
+
+/// Which side of the die a rigid wall closes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WallSide {
+    Left,
+    Right,
+    Bottom,
+    Top,
+}
+
+/// A rigid straight wall: `position` (x of a left/right wall, y of a bottom/top wall, mm, at
+/// t = 0) moving towards the particles at `velocity` (mm/s, positive inward).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WallSpec {
+    pub side: WallSide,
+    pub position: f64,
+    pub velocity: f64,
+    pub kind: crate::contact::kernels::ContactKind,
+}
+
+/// How contact constraints are enforced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactMethod {
+    /// Penalty (paper eq. 26–28).
+    Penalty,
+    /// Penalty plus Uzawa updates of the multipliers until the penetration is below tolerance.
+    AugmentedLagrangian,
+}
+
+/// The `[contact]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactSpec {
+    pub method: ContactMethod,
+    /// Contact kind between particles.
+    pub kind: crate::contact::kernels::ContactKind,
+    /// Normal and tangential penalty (MPa/mm); `None` = 10 E_min / h per pair.
+    pub penalty: Option<f64>,
+    /// Augmented Lagrangian: stop when the largest penetration <= this x the element size.
+    pub penetration_tol: f64,
+    pub max_augmentations: usize,
+    /// zeta: every free node is tied to its last converged position by a spring
+    /// zeta * E * a / h^2 (a tributary area, h element size), which keeps particles that touch
+    /// nothing solvable.
+    pub stabilisation: f64,
+    /// Search distance (mm); `None` = one element size.
+    pub search_distance: Option<f64>,
+}
+
+impl Default for ContactSpec {
+    fn default() -> Self {
+        Self {
+            method: ContactMethod::Penalty,
+            kind: crate::contact::kernels::ContactKind::Sliding,
+            penalty: None,
+            penetration_tol: 0.01,
+            max_augmentations: 20,
+            stabilisation: 1e-4,
+            search_distance: None,
+        }
+    }
+}
+
+/// The `[stop]` table: end the run early.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct StopSpec {
+    /// Stop once the solid ratio reaches this value.
+    pub solid_ratio: Option<f64>,
+    /// End the run normally (status "jammed") when the walls cannot advance any more (a step
+    /// fails below dt_min), instead of failing.
+    pub jam: bool,
 }
 
 /// A named material.
@@ -528,6 +604,82 @@ mod raw {
         pub time: Option<Time>,
         pub solver: Option<Solver>,
         pub output: Option<Output>,
+        pub walls: Option<Vec<WallRaw>>,
+        pub contact: Option<ContactRaw>,
+        pub grids: Option<Vec<GridRaw>>,
+        pub stop: Option<StopRaw>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct WallRaw {
+        pub side: Option<String>,
+        pub position: Option<f64>,
+        pub velocity: Option<f64>,
+        pub contact: Option<String>,
+        pub friction: Option<f64>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct ContactRaw {
+        pub method: Option<String>,
+        pub contact: Option<String>,
+        pub friction: Option<f64>,
+        pub penalty: Option<f64>,
+        pub penetration_tol: Option<f64>,
+        pub max_augmentations: Option<i64>,
+        pub stabilisation: Option<f64>,
+        pub search_distance: Option<f64>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct GridRaw {
+        pub material: Option<String>,
+        pub nx: Option<i64>,
+        pub ny: Option<i64>,
+        pub shape: Option<String>,
+        pub sides: Option<i64>,
+        pub solid_ratio: Option<f64>,
+        pub mesh_size: Option<f64>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct StopRaw {
+        pub solid_ratio: Option<f64>,
+        pub jam: Option<bool>,
+    }
+
+    impl Shape {
+        fn empty(kind: &str) -> Self {
+            Self {
+                kind: Some(kind.into()),
+                origin: None,
+                size: None,
+                center: None,
+                radius: None,
+                semi_axes: None,
+                angle: None,
+                vertices: None,
+                inner_radius: None,
+                outer_radius: None,
+                angles: None,
+            }
+        }
+        pub fn disc(center: [f64; 2], radius: f64) -> Self {
+            Self { center: Some(Pair(center)), radius: Some(radius), ..Self::empty("disc") }
+        }
+        pub fn polygon(vertices: Vec<[f64; 2]>) -> Self {
+            Self { vertices: Some(vertices.into_iter().map(Pair).collect()), ..Self::empty("polygon") }
+        }
+    }
+
+    impl Body {
+        pub fn generated(name: String, material: String, mesh_size: f64, shape: Shape) -> Self {
+            Self { name: Some(name), material: Some(material), mesh_size: Some(mesh_size), divisions: None, shape: Some(shape) }
+        }
     }
 
     #[derive(Deserialize)]
@@ -937,7 +1089,26 @@ impl Cx<'_> {
             materials.push(spec);
         }
 
-        let raw_bodies = r.bodies.unwrap_or_default();
+        let raw_walls = r.walls.unwrap_or_default();
+        let mut walls = Vec::with_capacity(raw_walls.len());
+        for (i, w) in raw_walls.into_iter().enumerate() {
+            walls.push(self.wall(&format!("walls[{i}]"), w)?);
+        }
+        let contact = self.contact(r.contact)?;
+        let stop = match r.stop {
+            None => StopSpec { solid_ratio: None, jam: true },
+            Some(st) => StopSpec {
+                solid_ratio: match st.solid_ratio {
+                    Some(v) => Some(self.num("stop.solid_ratio", v, v > 0.0 && v <= 1.0, "a solid ratio in (0, 1]")?),
+                    None => None,
+                },
+                jam: st.jam.unwrap_or(true),
+            },
+        };
+        let mut raw_bodies = r.bodies.unwrap_or_default();
+        for (i, g) in r.grids.unwrap_or_default().into_iter().enumerate() {
+            raw_bodies.extend(self.grid(&format!("grids[{i}]"), g, &walls)?);
+        }
         if raw_bodies.is_empty() {
             return Err(self.err(
                 "bodies",
@@ -992,6 +1163,9 @@ impl Cx<'_> {
             time,
             solver,
             output,
+            walls,
+            contact,
+            stop,
             base_dir: self.base_dir.to_path_buf(),
         })
     }
@@ -1620,6 +1794,114 @@ impl Cx<'_> {
                 ),
             )
         })
+    }
+
+    fn contact_kind(&self, key: &str, kind: Option<String>, friction: Option<f64>) -> Result<crate::contact::kernels::ContactKind, CaseError> {
+        use crate::contact::kernels::ContactKind;
+        let kind = kind.unwrap_or_else(|| "sliding".into());
+        let fkey = key.rsplit_once('.').map_or("friction".to_string(), |(p, _)| format!("{p}.friction"));
+        let mu = match friction {
+            Some(v) => self.num(&fkey, v, v >= 0.0, "a Coulomb friction coefficient >= 0")?,
+            None => 0.0,
+        };
+        Ok(match self.choice(key, &kind, &["sliding", "rubbing", "cohering"])? {
+            "rubbing" => {
+                if friction.is_none() {
+                    return Err(self.missing(&fkey, "a friction coefficient mu >= 0 for contact = \"rubbing\""));
+                }
+                ContactKind::Rubbing { mu }
+            }
+            "cohering" => ContactKind::Cohering,
+            _ => {
+                if mu > 0.0 {
+                    return Err(self.err(&fkey, format!("value {mu}: friction needs contact = \"rubbing\"")));
+                }
+                ContactKind::Sliding
+            }
+        })
+    }
+
+    fn wall(&self, key: &str, w: raw::WallRaw) -> Result<WallSpec, CaseError> {
+        let side_s = self.req(w.side, &format!("{key}.side"), "one of \"left\", \"right\", \"bottom\", \"top\"")?;
+        let side = match self.choice(&format!("{key}.side"), &side_s, &["left", "right", "bottom", "top"])? {
+            "left" => WallSide::Left,
+            "right" => WallSide::Right,
+            "bottom" => WallSide::Bottom,
+            _ => WallSide::Top,
+        };
+        let position = self.finite(
+            &format!("{key}.position"),
+            self.req(w.position, &format!("{key}.position"), "the wall's x (left/right) or y (bottom/top) at t = 0, mm")?,
+            "a position in mm",
+        )?;
+        let velocity = self.finite(&format!("{key}.velocity"), w.velocity.unwrap_or(0.0), "a velocity in mm/s (positive inward)")?;
+        let kind = self.contact_kind(&format!("{key}.contact"), w.contact, w.friction)?;
+        Ok(WallSpec { side, position, velocity, kind })
+    }
+
+    fn contact(&self, c: Option<raw::ContactRaw>) -> Result<ContactSpec, CaseError> {
+        let mut spec = ContactSpec::default();
+        let Some(c) = c else { return Ok(spec) };
+        if let Some(m) = c.method {
+            spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian"])? {
+                "penalty" => ContactMethod::Penalty,
+                _ => ContactMethod::AugmentedLagrangian,
+            };
+        }
+        spec.kind = self.contact_kind("contact.contact", c.contact, c.friction)?;
+        if let Some(v) = c.penalty {
+            spec.penalty = if v == 0.0 { None } else { Some(self.positive("contact.penalty", v, "a penalty in MPa/mm (0 = automatic)")?) };
+        }
+        if let Some(v) = c.penetration_tol {
+            spec.penetration_tol = self.positive("contact.penetration_tol", v, "a penetration tolerance relative to the element size")?;
+        }
+        if let Some(v) = c.max_augmentations {
+            spec.max_augmentations = self.count("contact.max_augmentations", v, 1)?;
+        }
+        if let Some(v) = c.stabilisation {
+            spec.stabilisation = self.num("contact.stabilisation", v, v >= 0.0, "a stabilisation factor >= 0")?;
+        }
+        if let Some(v) = c.search_distance {
+            spec.search_distance = if v == 0.0 { None } else { Some(self.positive("contact.search_distance", v, "a distance in mm (0 = one element size)")?) };
+        }
+        Ok(spec)
+    }
+
+    /// Expand a `[[grids]]` entry into raw bodies named `g{i}_p{k}` inside the die of the walls.
+    fn grid(&self, key: &str, g: raw::GridRaw, walls: &[WallSpec]) -> Result<Vec<raw::Body>, CaseError> {
+        let pos = |side: WallSide| walls.iter().find(|w| w.side == side).map(|w| w.position);
+        let (Some(x0), Some(x1), Some(y0), Some(y1)) = (pos(WallSide::Left), pos(WallSide::Right), pos(WallSide::Bottom), pos(WallSide::Top)) else {
+            return Err(self.err(key, "a particle grid fills the die, which needs all four [[walls]] (left, right, bottom, top)"));
+        };
+        if !(x1 > x0 && y1 > y0) {
+            return Err(self.err("walls", format!("the die [{x0}, {x1}] x [{y0}, {y1}] mm is empty; expected left < right and bottom < top")));
+        }
+        let material = self.req(g.material, &format!("{key}.material"), "the name of a material")?;
+        let nx = self.count(&format!("{key}.nx"), self.req(g.nx, &format!("{key}.nx"), "particles along x (>= 1)")?, 1)?;
+        let ny = self.count(&format!("{key}.ny"), self.req(g.ny, &format!("{key}.ny"), "particles along y (>= 1)")?, 1)?;
+        let shape = g.shape.unwrap_or_else(|| "disc".into());
+        let sides = match self.choice(&format!("{key}.shape"), &shape, &["disc", "polygon"])? {
+            "disc" => 0,
+            _ => self.count(&format!("{key}.sides"), g.sides.unwrap_or(6), 3)?,
+        };
+        let phi = self.req(g.solid_ratio, &format!("{key}.solid_ratio"), "the initial solid ratio in (0, 1)")?;
+        let phi = self.num(&format!("{key}.solid_ratio"), phi, phi > 0.0 && phi < 1.0, "a solid ratio in (0, 1)")?;
+        let h = self.positive(&format!("{key}.mesh_size"), self.req(g.mesh_size, &format!("{key}.mesh_size"), "an element size in mm")?, "an element size in mm")?;
+        let places = crate::packing::regular_grid(nx, ny, x1 - x0, y1 - y0, phi, sides).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
+        let ix = key.trim_start_matches("grids[").trim_end_matches(']');
+        Ok(places
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let c = [x0 + p.center[0], y0 + p.center[1]];
+                let shape = if sides == 0 {
+                    raw::Shape::disc(c, p.radius)
+                } else {
+                    raw::Shape::polygon(crate::packing::regular_polygon(c, p.radius, sides, std::f64::consts::FRAC_PI_2))
+                };
+                raw::Body::generated(format!("g{ix}_p{k}"), material.clone(), h, shape)
+            })
+            .collect())
     }
 
     fn check_set(&self, key: &str, body: &BodySpec, set: &str) -> Result<(), CaseError> {

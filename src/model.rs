@@ -58,6 +58,10 @@ pub struct Model {
     pub formulation: Formulation,
     /// Element technology of every element.
     pub element: crate::element::ElementKind,
+    /// Rigid walls, contact settings and early-stop criteria of a compaction.
+    pub walls: Vec<crate::case::WallSpec>,
+    pub contact: crate::case::ContactSpec,
+    pub stop: crate::case::StopSpec,
     pub materials: Vec<Material>,
     pub bodies: Vec<Body>,
     /// Reference coordinates of all nodes (mm).
@@ -198,6 +202,9 @@ impl Model {
             title: case.title.clone(),
             formulation: case.formulation,
             element: case.element,
+            walls: case.walls.clone(),
+            contact: case.contact.clone(),
+            stop: case.stop.clone(),
             materials: case.materials.iter().map(|m| m.material.clone()).collect(),
             bodies,
             x0,

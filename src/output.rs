@@ -15,6 +15,29 @@ pub struct HistoryWriter {
     pub path: PathBuf,
 }
 
+/// Compaction columns (the contact issue's exact names), present when the model has walls or
+/// several bodies.
+pub const COMPACTION_COLUMNS: [&str; 13] = [
+    "solid_ratio",
+    "p_left",
+    "p_right",
+    "p_bottom",
+    "p_top",
+    "f_left",
+    "f_right",
+    "f_bottom",
+    "f_top",
+    "max_penetration",
+    "active_contacts",
+    "stabilisation_energy",
+    "external_work",
+];
+
+/// Whether a model writes the compaction columns.
+pub fn has_compaction(model: &Model) -> bool {
+    !model.walls.is_empty() || model.bodies.len() > 1
+}
+
 /// Column names of `history.csv` for a model.
 pub fn history_columns(model: &Model) -> Vec<String> {
     let mut c: Vec<String> = [
@@ -32,6 +55,11 @@ pub fn history_columns(model: &Model) -> Vec<String> {
     .iter()
     .map(|s| s.to_string())
     .collect();
+    if has_compaction(model) {
+        for k in COMPACTION_COLUMNS {
+            c.push(k.to_string());
+        }
+    }
     for g in &model.reaction_groups {
         c.push(format!("rx_{}", g.label));
         c.push(format!("ry_{}", g.label));
@@ -67,6 +95,17 @@ impl HistoryWriter {
             r.volume_error_max_body,
             r.max_element_volume_change
         )?;
+        if let Some(c) = &r.compaction {
+            write!(self.out, ",{:.9e}", c.solid_ratio)?;
+            for v in c.pressure.iter().chain(&c.force) {
+                write!(self.out, ",{v:.9e}")?;
+            }
+            write!(
+                self.out,
+                ",{:.6e},{},{:.9e},{:.9e}",
+                c.max_penetration, c.active_contacts, c.stabilisation_energy, c.external_work
+            )?;
+        }
         for v in r.reactions.iter().chain(&r.displacements) {
             write!(self.out, ",{:.9e},{:.9e}", v[0], v[1])?;
         }

@@ -16,6 +16,8 @@
 //!    discarded and it is retried with Δt · cutback, down to `dt_min`.
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
+use crate::case::WallSide;
+use crate::contact::driver::{wall_position, ContactProblem, ContactStats};
 use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
 use crate::element::Volumetric;
 use crate::linalg::{make_solver, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
@@ -72,6 +74,25 @@ pub struct StepReport {
     pub reactions: Vec<[f64; 2]>,
     /// Mean displacement (mm) of each displacement group of the model.
     pub displacements: Vec<[f64; 2]>,
+    /// Compaction quantities, when the model has walls or several bodies.
+    pub compaction: Option<Compaction>,
+}
+
+/// Compaction quantities of a step (walls that do not exist report 0).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Compaction {
+    /// Total particle area / area enclosed by the walls (0 without four walls).
+    pub solid_ratio: f64,
+    /// Wall pressure = normal wall force / current wall length (MPa): left, right, bottom, top.
+    pub pressure: [f64; 4],
+    /// Normal wall force per unit thickness (N/mm): left, right, bottom, top.
+    pub force: [f64; 4],
+    pub max_penetration: f64,
+    pub active_contacts: usize,
+    /// Energy dissipated by the stabilisation springs since the start (N·mm/mm).
+    pub stabilisation_energy: f64,
+    /// Work of the walls on the particles since the start (N·mm/mm).
+    pub external_work: f64,
 }
 
 /// What a finished run reports.
@@ -87,6 +108,8 @@ pub struct RunSummary {
     pub n_free: usize,
     pub n_elements: usize,
     pub last: Option<StepReport>,
+    /// Why the run ended: "end time", "solid ratio reached" or "jammed".
+    pub stop_reason: String,
 }
 
 /// The converged solution at the end of the last committed step.
@@ -138,6 +161,15 @@ pub struct Simulation {
     step: usize,
     total_iterations: usize,
     total_cutbacks: usize,
+    /// Contact with walls and between bodies (None: nothing can touch).
+    pub contact: Option<ContactProblem>,
+    /// Stabilisation spring per dof (N/mm²), zero without contact.
+    stab_k: Vec<f64>,
+    contact_stats: ContactStats,
+    stab_energy: f64,
+    work_ext: f64,
+    last_wall_force: Vec<f64>,
+    f_elem_norm: f64,
 }
 
 impl Simulation {
@@ -145,7 +177,31 @@ impl Simulation {
     pub fn new(model: Model, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
         let n_dofs = model.n_dofs();
         let (eq, n_free) = number_equations(n_dofs, model.prescribed.iter().map(|p| p.dof));
-        let (assembler, kk) = Assembler::new(&model, eq, n_free);
+        let mut contact = ContactProblem::new(&model, model.walls.clone(), model.contact.clone());
+        let (assembler, kk) = match contact.as_mut() {
+            Some(c) => {
+                c.select_pairs(&model.x0);
+                Assembler::with_couplings(&model, eq, n_free, &c.couplings())
+            }
+            None => Assembler::new(&model, eq, n_free),
+        };
+        // stabilisation springs ζ E a / h² on every dof of a contact problem
+        let mut stab_k = vec![0.0; n_dofs];
+        if let Some(c) = &contact {
+            let zeta = model.contact.stabilisation;
+            if zeta > 0.0 {
+                for (e, el) in model.elements.iter().enumerate() {
+                    let b = model.elem_body[e];
+                    let a = crate::mesh::polygon_area(el.iter().map(|&n| model.x0[n])) / 4.0;
+                    let k = zeta * c.body_e[b] * a / (c.body_h[b] * c.body_h[b]);
+                    for &n in el {
+                        stab_k[2 * n] += k;
+                        stab_k[2 * n + 1] += k;
+                    }
+                }
+            }
+        }
+        let n_walls = model.walls.len();
         let kind = match spec.linear {
             LinearChoice::Fixed(k) => k,
             LinearChoice::Auto => {
@@ -228,6 +284,13 @@ impl Simulation {
             step: 0,
             total_iterations: 0,
             total_cutbacks: 0,
+            contact,
+            stab_k,
+            contact_stats: ContactStats::default(),
+            stab_energy: 0.0,
+            work_ext: 0.0,
+            last_wall_force: vec![0.0; n_walls],
+            f_elem_norm: 0.0,
         })
     }
 
@@ -251,20 +314,37 @@ impl Simulation {
         let t_end = self.time.end;
         let mut dt = self.time.dt.min(self.time.dt_max);
         let mut last = None;
+        let mut stop_reason = "end time".to_string();
         while self.sol.time < t_end * (1.0 - 1e-12) {
             if self.step >= self.time.max_steps {
                 return Err(SolveError::TooManySteps(self.time.max_steps));
             }
             let remaining = t_end - self.sol.time;
             let dt_try = if remaining <= dt * 1.01 { remaining } else { dt };
-            let report = self.advance(dt_try)?;
+            let report = match self.advance(dt_try) {
+                Ok(r) => r,
+                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.contact.is_some() && self.model.stop.jam && !self.model.walls.is_empty() => {
+                    tracing::warn!(time, dt, %cause, "the walls cannot advance any more: jammed");
+                    stop_reason = "jammed".to_string();
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
             dt = if report.cutbacks == 0 && report.newton_iterations <= self.time.easy_iterations {
                 (report.dt * self.time.growth).min(self.time.dt_max)
             } else {
                 report.dt
             };
             observer(self, &report);
+            let reached = match (&report.compaction, self.model.stop.solid_ratio) {
+                (Some(c), Some(target)) => c.solid_ratio >= target,
+                _ => false,
+            };
             last = Some(report);
+            if reached {
+                stop_reason = "solid ratio reached".to_string();
+                break;
+            }
         }
         Ok(RunSummary {
             steps: self.step,
@@ -277,6 +357,7 @@ impl Simulation {
             n_free: self.assembler.n_free,
             n_elements: self.model.elements.len(),
             last,
+            stop_reason,
         })
     }
 
@@ -284,7 +365,11 @@ impl Simulation {
     pub fn advance(&mut self, dt: f64) -> Result<StepReport, SolveError> {
         let mut dt_try = dt;
         let mut cutbacks = 0;
+        let snapshot = self.contact.as_ref().map(|c| c.snapshot());
         loop {
+            if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
+                c.restore(snap.clone());
+            }
             match self.try_step(dt_try) {
                 Ok(trial) => return Ok(self.commit(dt_try, trial, cutbacks)),
                 Err(cause) => {
@@ -382,6 +467,24 @@ impl Simulation {
             self.pool.as_ref(),
         )?;
         self.external_forces(inc.time, &x, tangent);
+        // element forces alone: with contact they balance the contact forces, which makes them
+        // the force scale of a problem driven by walls (no external force, no reaction)
+        self.f_elem_norm = self.f_int.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if let Some(c) = self.contact.as_mut() {
+            let kk = if tangent { Some((&mut self.kk, self.assembler.eq.as_slice())) } else { None };
+            self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk);
+            for (d, &k) in self.stab_k.iter().enumerate() {
+                if k > 0.0 {
+                    self.f_int[d] += k * (u[d] - self.sol.u[d]);
+                    let q = self.assembler.eq[d];
+                    if tangent && q != FIXED {
+                        if let Some(pos) = self.kk.find(q, q) {
+                            self.kk.values[pos] += k;
+                        }
+                    }
+                }
+            }
+        }
         let mut norm2 = 0.0;
         for (d, &q) in self.assembler.eq.iter().enumerate() {
             if q != FIXED {
@@ -397,7 +500,7 @@ impl Simulation {
     /// dofs (which includes the reactions), never below round-off.
     fn reference_force(&self) -> f64 {
         let n = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        n(&self.f_ext).max(n(&self.f_int)).max(self.force_floor)
+        n(&self.f_ext).max(n(&self.f_int)).max(self.f_elem_norm).max(self.force_floor)
     }
 
     fn factor(&mut self) -> Result<(), NewtonFailure> {
@@ -409,6 +512,18 @@ impl Simulation {
     fn try_step(&mut self, dt: f64) -> Result<Trial, NewtonFailure> {
         let t = self.sol.time + dt;
         let inc = TimeIncrement { time: t, dt };
+        // contact pairs for this step, frozen during its Newton iterations
+        if let Some(c) = self.contact.as_mut() {
+            let x_n = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + self.sol.u[2 * n], p[1] + self.sol.u[2 * n + 1]]).collect::<Vec<_>>();
+            if c.select_pairs(&x_n) {
+                let (assembler, kk) = Assembler::with_couplings(&self.model, self.assembler.eq.clone(), self.assembler.n_free, &c.couplings());
+                self.assembler = assembler;
+                self.kk = kk;
+                if self.assembler.n_free > 0 {
+                    self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+                }
+            }
+        }
         // prediction
         let mut u = self.sol.u.clone();
         if self.dt_prev > 0.0 {
@@ -461,7 +576,15 @@ impl Simulation {
                     worst = worst.max((self.trial_fields.theta[e] - 1.0).abs());
                 }
             }
-            if worst <= self.spec.volume_tol || updates >= self.spec.max_volume_updates {
+            let contact_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
+                && updates < self.model.contact.max_augmentations;
+            if contact_update {
+                let x = self.coords(&u);
+                if let Some(c) = self.contact.as_mut() {
+                    c.augment(&x, t);
+                }
+            }
+            if !contact_update && (worst <= self.spec.volume_tol || updates >= self.spec.max_volume_updates) {
                 if worst > self.spec.volume_tol {
                     tracing::warn!(worst, tol = self.spec.volume_tol, "volume constraint not met after the allowed updates");
                 }
@@ -600,6 +723,11 @@ impl Simulation {
 
     /// Commit a converged step: states, displacements, multipliers, time; build its report.
     fn commit(&mut self, dt: f64, trial: Trial, cutbacks: usize) -> StepReport {
+        let stab: f64 = self.stab_k.iter().enumerate().map(|(d, k)| k * (trial.u[d] - self.sol.u[d]).powi(2)).sum();
+        self.stab_energy += stab;
+        if let Some(c) = self.contact.as_mut() {
+            c.commit();
+        }
         self.u_prev.copy_from_slice(&self.sol.u);
         self.sol.u = trial.u;
         self.sol.lambda = trial.lambda;
@@ -646,7 +774,37 @@ impl Simulation {
                 [m[0] / k, m[1] / k]
             })
             .collect();
+        let compaction = self.contact.as_ref().map(|c| {
+            let t = self.sol.time;
+            let mut out = Compaction {
+                max_penetration: self.contact_stats.max_penetration,
+                active_contacts: self.contact_stats.active,
+                ..Default::default()
+            };
+            for (w, spec) in c.walls.iter().enumerate() {
+                let f = self.contact_stats.wall_force.get(w).copied().unwrap_or(0.0);
+                let moved = (wall_position(spec, t) - wall_position(spec, t - dt)).abs();
+                self.work_ext += 0.5 * (f + self.last_wall_force[w]) * moved;
+                self.last_wall_force[w] = f;
+                let k = match spec.side {
+                    WallSide::Left => 0,
+                    WallSide::Right => 1,
+                    WallSide::Bottom => 2,
+                    WallSide::Top => 3,
+                };
+                let len = c.wall_length(w, t, &x);
+                out.force[k] += f;
+                out.pressure[k] += if len > 0.0 { f / len } else { 0.0 };
+            }
+            if let Some([x0, x1, y0, y1]) = c.die(t) {
+                out.solid_ratio = total / ((x1 - x0) * (y1 - y0));
+            }
+            out.stabilisation_energy = self.stab_energy;
+            out.external_work = self.work_ext;
+            out
+        });
         StepReport {
+            compaction,
             step: self.step,
             time: self.sol.time,
             dt,

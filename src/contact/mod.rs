@@ -6,6 +6,7 @@
 //! enforcement (penalty, augmented Lagrangian, Lagrange multipliers) and friction live in the
 //! kernels, the driver only assembles them.
 
+pub mod driver;
 pub mod kernels;
 pub mod search;
 

@@ -1,0 +1,362 @@
+//! The contact problem of a model: walls, boundary segments, the pairs frozen for a step, their
+//! histories, and the assembly of the pair kernels into the global force and tangent.
+//!
+//! Lifecycle per step: [`ContactProblem::select_pairs`] on the converged configuration (search
+//! within the search distance, one master segment per slave node, two-pass: every boundary
+//! node is a slave against the other bodies) → [`ContactProblem::add`] at every Newton
+//! iterate (kernels from the committed histories) → optionally [`ContactProblem::augment`]
+//! (Uzawa) and solve again → [`ContactProblem::commit`].
+
+use super::kernels::{self, ContactKind, PairHistory, PairOut, PenaltyParams, Wall, WallOut};
+use super::search::{boundary_of, ContactSearch};
+use super::Segment;
+use crate::assembly::FIXED;
+use crate::case::{ContactMethod, ContactSpec, WallSide, WallSpec};
+use crate::linalg::CsrMatrix;
+use crate::model::Model;
+use std::collections::HashMap;
+
+/// A node-to-segment pair frozen for the current step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrozenPair {
+    /// Index into the slave list.
+    pub slave: usize,
+    /// Index into the segment list.
+    pub segment: usize,
+}
+
+/// What the contact contributions of one evaluation amount to.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactStats {
+    /// Normal force of the particles on each wall (N/mm, positive in compression), in the order
+    /// of the model's walls.
+    pub wall_force: Vec<f64>,
+    /// Largest penetration over all active pairs (mm, ≥ 0).
+    pub max_penetration: f64,
+    /// Number of active pairs (node-to-segment and node-to-wall).
+    pub active: usize,
+}
+
+pub struct ContactProblem {
+    pub walls: Vec<WallSpec>,
+    pub spec: ContactSpec,
+    pub segments: Vec<Segment>,
+    /// Boundary nodes: (node, body).
+    pub slaves: Vec<(usize, usize)>,
+    /// Tributary (reference) boundary length of each slave node (mm).
+    pub area: Vec<f64>,
+    /// Mean element size and Young's modulus of each body.
+    pub body_h: Vec<f64>,
+    pub body_e: Vec<f64>,
+    search: ContactSearch,
+    pub pairs: Vec<FrozenPair>,
+    nts_hist: HashMap<(usize, usize), PairHistory>,
+    wall_hist: Vec<Vec<PairHistory>>,
+    trial_nts: Vec<PairHistory>,
+    trial_wall: Vec<Vec<PairHistory>>,
+}
+
+impl Wall {
+    fn from_spec(w: &WallSpec, t: f64) -> Wall {
+        let p = wall_position(w, t);
+        match w.side {
+            WallSide::Left => Wall { point: [p, 0.0], normal: [1.0, 0.0] },
+            WallSide::Right => Wall { point: [p, 0.0], normal: [-1.0, 0.0] },
+            WallSide::Bottom => Wall { point: [0.0, p], normal: [0.0, 1.0] },
+            WallSide::Top => Wall { point: [0.0, p], normal: [0.0, -1.0] },
+        }
+    }
+}
+
+/// Position of a wall at time t (x of left/right, y of bottom/top, mm).
+pub fn wall_position(w: &WallSpec, t: f64) -> f64 {
+    match w.side {
+        WallSide::Left | WallSide::Bottom => w.position + w.velocity * t,
+        WallSide::Right | WallSide::Top => w.position - w.velocity * t,
+    }
+}
+
+impl ContactProblem {
+    /// The contact problem of a model, or `None` when there is nothing that can touch (no walls
+    /// and a single body).
+    pub fn new(model: &Model, walls: Vec<WallSpec>, spec: ContactSpec) -> Option<Self> {
+        if walls.is_empty() && model.bodies.len() < 2 {
+            return None;
+        }
+        let meshes: Vec<(&crate::mesh::Mesh, usize)> = model.bodies.iter().map(|b| (&b.mesh, b.node_offset)).collect();
+        let (segments, slaves) = boundary_of(&meshes);
+        let mut len_at: HashMap<usize, f64> = HashMap::new();
+        for s in &segments {
+            let (a, b) = (model.x0[s.nodes[0]], model.x0[s.nodes[1]]);
+            let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+            for n in s.nodes {
+                *len_at.entry(n).or_insert(0.0) += 0.5 * l;
+            }
+        }
+        let area = slaves.iter().map(|(n, _)| len_at.get(n).copied().unwrap_or(0.0)).collect();
+        let mut body_h = Vec::new();
+        let mut body_e = Vec::new();
+        for b in &model.bodies {
+            let a: f64 = b.mesh.area(&b.mesh.nodes);
+            body_h.push((a / b.mesh.n_elements().max(1) as f64).sqrt());
+            body_e.push(match &model.materials[b.material] {
+                crate::material::Material::Elastic(m) => m.e,
+                crate::material::Material::J2(m) => m.e,
+                crate::material::Material::Creep(m) => m.e,
+            });
+        }
+        let nw = walls.len();
+        let ns = slaves.len();
+        let search = ContactSearch::new(segments.clone());
+        Some(Self {
+            walls,
+            spec,
+            segments,
+            slaves,
+            area,
+            body_h,
+            body_e,
+            search,
+            pairs: Vec::new(),
+            nts_hist: HashMap::new(),
+            wall_hist: vec![vec![PairHistory::default(); ns]; nw],
+            trial_nts: Vec::new(),
+            trial_wall: vec![vec![PairHistory::default(); ns]; nw],
+        })
+    }
+
+    fn h_of(&self, body: usize) -> f64 {
+        self.body_h[body]
+    }
+
+    fn params(&self, b1: usize, b2: Option<usize>) -> PenaltyParams {
+        match self.spec.penalty {
+            Some(e) => PenaltyParams { eps_n: e, eps_t: e },
+            None => {
+                let (e, h) = match b2 {
+                    Some(b2) => (self.body_e[b1].min(self.body_e[b2]), self.body_h[b1].min(self.body_h[b2])),
+                    None => (self.body_e[b1], self.body_h[b1]),
+                };
+                kernels::default_penalty(e, h)
+            }
+        }
+    }
+
+    /// The die [x_left, x_right, y_bottom, y_top] at time t, when all four walls exist.
+    pub fn die(&self, t: f64) -> Option<[f64; 4]> {
+        let pos = |s: WallSide| self.walls.iter().find(|w| w.side == s).map(|w| wall_position(w, t));
+        Some([pos(WallSide::Left)?, pos(WallSide::Right)?, pos(WallSide::Bottom)?, pos(WallSide::Top)?])
+    }
+
+    /// Current length of wall `w` (mm): the distance between the two walls it spans, or the
+    /// extent of the particles when those walls are missing.
+    pub fn wall_length(&self, w: usize, t: f64, x: &[[f64; 2]]) -> f64 {
+        let pos = |s: WallSide| self.walls.iter().find(|q| q.side == s).map(|q| wall_position(q, t));
+        let extent = |c: usize| {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for &(n, _) in &self.slaves {
+                lo = lo.min(x[n][c]);
+                hi = hi.max(x[n][c]);
+            }
+            (lo, hi)
+        };
+        match self.walls[w].side {
+            WallSide::Left | WallSide::Right => match (pos(WallSide::Bottom), pos(WallSide::Top)) {
+                (Some(a), Some(b)) => b - a,
+                _ => {
+                    let (lo, hi) = extent(1);
+                    hi - lo
+                }
+            },
+            WallSide::Bottom | WallSide::Top => match (pos(WallSide::Left), pos(WallSide::Right)) {
+                (Some(a), Some(b)) => b - a,
+                _ => {
+                    let (lo, hi) = extent(0);
+                    hi - lo
+                }
+            },
+        }
+    }
+
+    /// Choose the node-to-segment pairs for the next step on configuration `x` (frozen during
+    /// the step). Returns true when the set of pairs changed (the sparsity pattern must follow).
+    pub fn select_pairs(&mut self, x: &[[f64; 2]]) -> bool {
+        let h_min = self.body_h.iter().copied().fold(f64::INFINITY, f64::min);
+        let distance = self.spec.search_distance.unwrap_or(h_min);
+        self.search.update(x);
+        let candidates = self.search.pairs(x, &self.slaves, distance);
+        // per slave node: the candidate segment with the smallest distance whose projection
+        // falls on it (small tolerance at the ends)
+        let slave_index: HashMap<usize, usize> = self.slaves.iter().enumerate().map(|(i, (n, _))| (*n, i)).collect();
+        let mut best: HashMap<usize, (f64, usize)> = HashMap::new();
+        for (node, seg) in candidates {
+            let s = self.segments[seg];
+            let g = kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]);
+            if !(g.xi >= -0.02 && g.xi <= 1.02) {
+                continue;
+            }
+            let d = super::search::point_segment_distance(x[node], x[s.nodes[0]], x[s.nodes[1]]);
+            let si = slave_index[&node];
+            if g.gap < -self.h_of(self.slaves[si].1) {
+                continue; // deeper than an element: not a physical contact of this node
+            }
+            match best.get(&si) {
+                Some(&(db, _)) if db <= d => {}
+                _ => {
+                    best.insert(si, (d, seg));
+                }
+            }
+        }
+        let mut pairs: Vec<FrozenPair> = best.into_iter().map(|(slave, (_, segment))| FrozenPair { slave, segment }).collect();
+        pairs.sort_by_key(|p| (p.slave, p.segment));
+        let changed = pairs != self.pairs;
+        self.pairs = pairs;
+        self.trial_nts = self
+            .pairs
+            .iter()
+            .map(|p| self.nts_hist.get(&(self.slaves[p.slave].0, p.segment)).copied().unwrap_or_default())
+            .collect();
+        changed
+    }
+
+    /// Node triples (slave, master 1, master 2) that the sparsity pattern must couple.
+    pub fn couplings(&self) -> Vec<[usize; 3]> {
+        self.pairs
+            .iter()
+            .map(|p| {
+                let s = self.segments[p.segment];
+                [self.slaves[p.slave].0, s.nodes[0], s.nodes[1]]
+            })
+            .collect()
+    }
+
+    /// Add the contact forces to `f_int` and, with a tangent, their derivative to `kk`, at
+    /// configuration `x` and time `t`. Histories are read from the committed state (for the
+    /// augmented Lagrangian, the current multipliers); the trial histories are kept for commit.
+    pub fn add(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize])>) -> ContactStats {
+        let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
+        let mut out = PairOut::default();
+        for (k, p) in self.pairs.iter().enumerate() {
+            let (node, body) = self.slaves[p.slave];
+            let s = self.segments[p.segment];
+            let old = self.nts_hist.get(&(node, p.segment)).copied().unwrap_or_default();
+            let params = self.params(body, Some(s.body));
+            let kind = self.spec.kind;
+            kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave], kind, &params, &old, &mut out);
+            self.trial_nts[k] = out.new_history;
+            if !out.active {
+                continue;
+            }
+            stats.active += 1;
+            stats.max_penetration = stats.max_penetration.max(-out.gap);
+            let dofs = [2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
+            for i in 0..6 {
+                f_int[dofs[i]] += out.f[i];
+            }
+            if let Some((m, eq)) = kk.as_mut() {
+                add_block(m, eq, &dofs, &out.k);
+            }
+        }
+        let mut wout = WallOut::default();
+        for (w, spec) in self.walls.iter().enumerate() {
+            let wall = Wall::from_spec(spec, t);
+            // tangential wall motion: the walls move along their normals only
+            for (i, &(node, body)) in self.slaves.iter().enumerate() {
+                let old = self.wall_hist[w][i];
+                let params = self.params(body, None);
+                kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
+                self.trial_wall[w][i] = wout.new_history;
+                if !wout.active {
+                    continue;
+                }
+                stats.active += 1;
+                stats.max_penetration = stats.max_penetration.max(-wout.gap);
+                stats.wall_force[w] += wout.pressure * self.area[i];
+                let dofs = [2 * node, 2 * node + 1];
+                for c in 0..2 {
+                    f_int[dofs[c]] += wout.f[c];
+                }
+                if let Some((m, eq)) = kk.as_mut() {
+                    add_block(m, eq, &dofs, &wout.k);
+                }
+            }
+        }
+        stats
+    }
+
+    /// Uzawa update of every pair's multipliers from the last evaluation at `x`, `t`.
+    pub fn augment(&mut self, x: &[[f64; 2]], t: f64) {
+        let mut out = PairOut::default();
+        for p in self.pairs.clone() {
+            let (node, body) = self.slaves[p.slave];
+            let s = self.segments[p.segment];
+            let old = self.nts_hist.get(&(node, p.segment)).copied().unwrap_or_default();
+            let params = self.params(body, Some(s.body));
+            kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave], self.spec.kind, &params, &old, &mut out);
+            self.nts_hist.insert((node, p.segment), kernels::augment(&old, &out));
+        }
+        let mut wout = WallOut::default();
+        for (w, spec) in self.walls.iter().enumerate() {
+            let wall = Wall::from_spec(spec, t);
+            for (i, &(node, body)) in self.slaves.iter().enumerate() {
+                let old = self.wall_hist[w][i];
+                let params = self.params(body, None);
+                kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
+                self.wall_hist[w][i] = kernels::augment_wall(&old, &wout);
+            }
+        }
+    }
+
+    /// Whether the augmented Lagrangian asks for another update after a converged solve.
+    pub fn needs_augmentation(&self, stats: &ContactStats) -> bool {
+        if self.spec.method != ContactMethod::AugmentedLagrangian {
+            return false;
+        }
+        let h_min = self.body_h.iter().copied().fold(f64::INFINITY, f64::min);
+        stats.max_penetration > self.spec.penetration_tol * h_min
+    }
+
+    /// Commit the trial histories of the last evaluation (after a converged step).
+    pub fn commit(&mut self) {
+        // keep only the pairs of this step (a node that changed master starts afresh)
+        let mut next = HashMap::with_capacity(self.pairs.len());
+        for (k, p) in self.pairs.iter().enumerate() {
+            next.insert((self.slaves[p.slave].0, p.segment), self.trial_nts[k]);
+        }
+        self.nts_hist = next;
+        self.wall_hist.clone_from(&self.trial_wall);
+    }
+
+    /// Forget augmented multipliers of a failed step: restore from the committed state.
+    pub fn snapshot(&self) -> (HashMap<(usize, usize), PairHistory>, Vec<Vec<PairHistory>>) {
+        (self.nts_hist.clone(), self.wall_hist.clone())
+    }
+
+    pub fn restore(&mut self, snap: (HashMap<(usize, usize), PairHistory>, Vec<Vec<PairHistory>>)) {
+        self.nts_hist = snap.0;
+        self.wall_hist = snap.1;
+    }
+
+    /// Contact kind used between particles.
+    pub fn kind(&self) -> ContactKind {
+        self.spec.kind
+    }
+}
+
+fn add_block<const N: usize>(m: &mut CsrMatrix, eq: &[usize], dofs: &[usize; N], k: &[[f64; N]; N]) {
+    for a in 0..N {
+        let r = eq[dofs[a]];
+        if r == FIXED {
+            continue;
+        }
+        for b in 0..N {
+            let c = eq[dofs[b]];
+            if c == FIXED {
+                continue;
+            }
+            if let Some(pos) = m.find(r, c) {
+                m.values[pos] += k[a][b];
+            }
+        }
+    }
+}
