@@ -1880,15 +1880,31 @@ impl Cx<'_> {
         let nx = self.count(&format!("{key}.nx"), self.req(g.nx, &format!("{key}.nx"), "particles along x (>= 1)")?, 1)?;
         let ny = self.count(&format!("{key}.ny"), self.req(g.ny, &format!("{key}.ny"), "particles along y (>= 1)")?, 1)?;
         let shape = g.shape.unwrap_or_else(|| "disc".into());
-        let sides = match self.choice(&format!("{key}.shape"), &shape, &["disc", "polygon"])? {
+        let sides = match self.choice(&format!("{key}.shape"), &shape, &["disc", "ellipse", "polygon"])? {
             "disc" => 0,
+            "ellipse" => usize::MAX,
             _ => self.count(&format!("{key}.sides"), g.sides.unwrap_or(6), 3)?,
         };
         let phi = self.req(g.solid_ratio, &format!("{key}.solid_ratio"), "the initial solid ratio in (0, 1)")?;
         let phi = self.num(&format!("{key}.solid_ratio"), phi, phi > 0.0 && phi < 1.0, "a solid ratio in (0, 1)")?;
         let h = self.positive(&format!("{key}.mesh_size"), self.req(g.mesh_size, &format!("{key}.mesh_size"), "an element size in mm")?, "an element size in mm")?;
-        let places = crate::packing::regular_grid(nx, ny, x1 - x0, y1 - y0, phi, sides).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
         let ix = key.trim_start_matches("grids[").trim_end_matches(']');
+        if sides == usize::MAX {
+            let places = crate::packing::regular_grid_ellipses(nx, ny, x1 - x0, y1 - y0, phi).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
+            return Ok(places
+                .iter()
+                .enumerate()
+                .map(|(k, (c, ab))| {
+                    let mut shape = raw::Shape::disc([x0 + c[0], y0 + c[1]], 0.0);
+                    shape.kind = Some("ellipse".into());
+                    shape.radius = None;
+                    shape.semi_axes = Some(raw::Pair(*ab));
+                    shape.angle = Some(0.0);
+                    raw::Body::generated(format!("g{ix}_p{k}"), material.clone(), h, shape)
+                })
+                .collect());
+        }
+        let places = crate::packing::regular_grid(nx, ny, x1 - x0, y1 - y0, phi, sides).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
         Ok(places
             .iter()
             .enumerate()

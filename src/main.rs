@@ -226,7 +226,8 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
     match result {
         Ok(s) => {
             eprintln!(
-                "mpfem: completed t = {} s in {} steps, {} Newton iterations, {} cut-backs, {:.2} s wall; volume error {:.2e}",
+                "mpfem: completed ({}) t = {} s in {} steps, {} Newton iterations, {} cut-backs, {:.2} s wall; volume error {:.2e}",
+                s.stop_reason,
                 s.final_time,
                 s.steps,
                 s.newton_iterations,
