@@ -110,6 +110,21 @@ pub struct RunSummary {
     pub last: Option<StepReport>,
     /// Why the run ended: "end time", "solid ratio reached" or "jammed".
     pub stop_reason: String,
+    /// Wall time spent per phase (s).
+    pub timing: Timing,
+}
+
+/// Accumulated wall time per phase of the solution (s).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timing {
+    /// Element kernels and their scatter (residual and tangent).
+    pub element_assembly: f64,
+    /// Contact search (pair selection, pattern rebuilds).
+    pub contact_search: f64,
+    /// Contact kernels and stabilisation added to the residual and tangent.
+    pub contact_assembly: f64,
+    /// Numeric factorisations and solves (symbolic analyses included).
+    pub linear_solve: f64,
 }
 
 /// The converged solution at the end of the last committed step.
@@ -170,6 +185,7 @@ pub struct Simulation {
     work_ext: f64,
     last_wall_force: Vec<f64>,
     f_elem_norm: f64,
+    pub timing: Timing,
 }
 
 impl Simulation {
@@ -291,6 +307,7 @@ impl Simulation {
             work_ext: 0.0,
             last_wall_force: vec![0.0; n_walls],
             f_elem_norm: 0.0,
+            timing: Timing::default(),
         })
     }
 
@@ -358,6 +375,7 @@ impl Simulation {
             n_elements: self.model.elements.len(),
             last,
             stop_reason,
+            timing: self.timing.clone(),
         })
     }
 
@@ -454,6 +472,7 @@ impl Simulation {
     fn evaluate(&mut self, u: &[f64], inc: TimeIncrement, vol: &[Volumetric], tangent: bool) -> Result<f64, AssemblyError> {
         let x = self.coords(u);
         let kk = if tangent { Some(&mut self.kk) } else { None };
+        let t0 = Instant::now();
         self.assembler.assemble(
             &self.model,
             u,
@@ -466,10 +485,12 @@ impl Simulation {
             &mut self.trial_fields,
             self.pool.as_ref(),
         )?;
+        self.timing.element_assembly += t0.elapsed().as_secs_f64();
         self.external_forces(inc.time, &x, tangent);
         // element forces alone: with contact they balance the contact forces, which makes them
         // the force scale of a problem driven by walls (no external force, no reaction)
         self.f_elem_norm = self.f_int.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let t1 = Instant::now();
         if let Some(c) = self.contact.as_mut() {
             let kk = if tangent { Some((&mut self.kk, self.assembler.eq.as_slice())) } else { None };
             self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk);
@@ -485,6 +506,7 @@ impl Simulation {
                 }
             }
         }
+        self.timing.contact_assembly += t1.elapsed().as_secs_f64();
         let mut norm2 = 0.0;
         for (d, &q) in self.assembler.eq.iter().enumerate() {
             if q != FIXED {
@@ -504,7 +526,10 @@ impl Simulation {
     }
 
     fn factor(&mut self) -> Result<(), NewtonFailure> {
-        self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()))
+        let t0 = Instant::now();
+        let r = self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()));
+        self.timing.linear_solve += t0.elapsed().as_secs_f64();
+        r
     }
 
     /// Attempt one step of size dt from the committed solution. On success the trial
@@ -513,6 +538,7 @@ impl Simulation {
         let t = self.sol.time + dt;
         let inc = TimeIncrement { time: t, dt };
         // contact pairs for this step, frozen during its Newton iterations
+        let t_search = Instant::now();
         if let Some(c) = self.contact.as_mut() {
             let x_n = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + self.sol.u[2 * n], p[1] + self.sol.u[2 * n + 1]]).collect::<Vec<_>>();
             if c.select_pairs(&x_n) {
@@ -524,6 +550,7 @@ impl Simulation {
                 }
             }
         }
+        self.timing.contact_search += t_search.elapsed().as_secs_f64();
         // prediction
         let mut u = self.sol.u.clone();
         if self.dt_prev > 0.0 {
@@ -674,9 +701,10 @@ impl Simulation {
             }
             // solve K Δu = R
             self.du.iter_mut().for_each(|v| *v = 0.0);
-            self.linear
-                .solve(&self.kk, &self.r, &mut self.du)
-                .map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+            let t0 = Instant::now();
+            let solved = self.linear.solve(&self.kk, &self.r, &mut self.du);
+            self.timing.linear_solve += t0.elapsed().as_secs_f64();
+            solved.map_err(|e| NewtonFailure::Linear(e.to_string()))?;
             let energy = self.du.iter().zip(&self.r).map(|(a, b)| a * b).sum::<f64>().abs();
             if k == 0 {
                 e0 = energy.max(f64::MIN_POSITIVE);
