@@ -160,6 +160,10 @@ pub struct ContactSpec {
     /// zeta * E * a / h^2 (a tributary area, h element size), which keeps particles that touch
     /// nothing solvable.
     pub stabilisation: f64,
+    /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
+    /// steadies the Newton iterations of weakly held particles without changing the solution
+    /// or dissipating energy.
+    pub regularisation: f64,
     /// Search distance (mm); `None` = one element size.
     pub search_distance: Option<f64>,
 }
@@ -172,7 +176,8 @@ impl Default for ContactSpec {
             penalty: None,
             penetration_tol: 0.01,
             max_augmentations: 20,
-            stabilisation: 1e-4,
+            stabilisation: 1e-5,
+            regularisation: 0.0,
             search_distance: None,
         }
     }
@@ -630,6 +635,7 @@ mod raw {
         pub penetration_tol: Option<f64>,
         pub max_augmentations: Option<i64>,
         pub stabilisation: Option<f64>,
+        pub regularisation: Option<f64>,
         pub search_distance: Option<f64>,
     }
 
@@ -1860,6 +1866,9 @@ impl Cx<'_> {
         }
         if let Some(v) = c.stabilisation {
             spec.stabilisation = self.num("contact.stabilisation", v, v >= 0.0, "a stabilisation factor >= 0")?;
+        }
+        if let Some(v) = c.regularisation {
+            spec.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;
         }
         if let Some(v) = c.search_distance {
             spec.search_distance = if v == 0.0 { None } else { Some(self.positive("contact.search_distance", v, "a distance in mm (0 = one element size)")?) };

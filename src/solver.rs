@@ -180,6 +180,8 @@ pub struct Simulation {
     pub contact: Option<ContactProblem>,
     /// Stabilisation spring per dof (N/mm²), zero without contact.
     stab_k: Vec<f64>,
+    /// Tangent-only regularisation per dof (N/mm²).
+    reg_k: Vec<f64>,
     contact_stats: ContactStats,
     stab_energy: f64,
     work_ext: f64,
@@ -204,19 +206,20 @@ impl Simulation {
         // stabilisation springs ζ E a / h² on every dof of a contact problem
         let mut stab_k = vec![0.0; n_dofs];
         if let Some(c) = &contact {
-            let zeta = model.contact.stabilisation;
-            if zeta > 0.0 {
-                for (e, el) in model.elements.iter().enumerate() {
-                    let b = model.elem_body[e];
-                    let a = crate::mesh::polygon_area(el.iter().map(|&n| model.x0[n])) / 4.0;
-                    let k = zeta * c.body_e[b] * a / (c.body_h[b] * c.body_h[b]);
-                    for &n in el {
-                        stab_k[2 * n] += k;
-                        stab_k[2 * n + 1] += k;
-                    }
+            for (e, el) in model.elements.iter().enumerate() {
+                let b = model.elem_body[e];
+                let a = crate::mesh::polygon_area(el.iter().map(|&n| model.x0[n])) / 4.0;
+                let k = c.body_e[b] * a / (c.body_h[b] * c.body_h[b]);
+                for &n in el {
+                    stab_k[2 * n] += k;
+                    stab_k[2 * n + 1] += k;
                 }
             }
         }
+        // base nodal stiffness E a / h² → stabilisation ζ·base (residual and tangent) and
+        // regularisation ρ·base (tangent only)
+        let reg_k: Vec<f64> = stab_k.iter().map(|k| k * model.contact.regularisation).collect();
+        stab_k.iter_mut().for_each(|k| *k *= model.contact.stabilisation);
         let n_walls = model.walls.len();
         let kind = match spec.linear {
             LinearChoice::Fixed(k) => k,
@@ -302,6 +305,7 @@ impl Simulation {
             total_cutbacks: 0,
             contact,
             stab_k,
+            reg_k,
             contact_stats: ContactStats::default(),
             stab_energy: 0.0,
             work_ext: 0.0,
@@ -494,14 +498,16 @@ impl Simulation {
         if let Some(c) = self.contact.as_mut() {
             let kk = if tangent { Some((&mut self.kk, self.assembler.eq.as_slice())) } else { None };
             self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk);
-            for (d, &k) in self.stab_k.iter().enumerate() {
+            // stabilisation springs (in residual and tangent, dissipate energy) and the
+            // tangent-only regularisation (changes the Newton path, not the solution)
+            for (d, (&k, &kr)) in self.stab_k.iter().zip(&self.reg_k).enumerate() {
                 if k > 0.0 {
                     self.f_int[d] += k * (u[d] - self.sol.u[d]);
-                    let q = self.assembler.eq[d];
-                    if tangent && q != FIXED {
-                        if let Some(pos) = self.kk.find(q, q) {
-                            self.kk.values[pos] += k;
-                        }
+                }
+                let q = self.assembler.eq[d];
+                if tangent && q != FIXED && k + kr > 0.0 {
+                    if let Some(pos) = self.kk.find(q, q) {
+                        self.kk.values[pos] += k + kr;
                     }
                 }
             }
