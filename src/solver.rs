@@ -344,7 +344,7 @@ impl Simulation {
             let dt_try = if remaining <= dt * 1.01 { remaining } else { dt };
             let report = match self.advance(dt_try) {
                 Ok(r) => r,
-                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.contact.is_some() && self.model.stop.jam && !self.model.walls.is_empty() => {
+                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && self.is_jammed(last.as_ref()) => {
                     tracing::warn!(time, dt, %cause, "the walls cannot advance any more: jammed");
                     stop_reason = "jammed".to_string();
                     break;
@@ -381,6 +381,23 @@ impl Simulation {
             stop_reason,
             timing: self.timing.clone(),
         })
+    }
+
+    /// A failed step counts as a jam (the walls cannot advance any more) only when the last
+    /// converged state is dense (solid ratio ≥ 0.9) and every moving wall carries load;
+    /// otherwise the failure is a convergence failure and is reported as an error.
+    fn is_jammed(&self, last: Option<&StepReport>) -> bool {
+        let Some(c) = last.and_then(|r| r.compaction.as_ref()) else { return false };
+        let moving_loaded = self.model.walls.iter().all(|w| {
+            let k = match w.side {
+                WallSide::Left => 0,
+                WallSide::Right => 1,
+                WallSide::Bottom => 2,
+                WallSide::Top => 3,
+            };
+            w.velocity == 0.0 || c.force[k] > 0.0
+        });
+        !self.model.walls.is_empty() && c.solid_ratio >= 0.9 && moving_loaded
     }
 
     /// One converged step of size `dt`, or smaller after cut-backs (the report says which).
