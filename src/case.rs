@@ -35,17 +35,6 @@ pub const MAX_DIVISIONS: i64 = 100_000;
 /// Default density, t/mm³.
 pub const DEFAULT_DENSITY: f64 = 1e-9;
 
-/// The paper's Table 2 creep parameters of asphalt (the stress unit of `a` is not stated
-/// there; the case file must say it, see `stress_unit`). `stress_scale` is a placeholder 1.
-pub const ASPHALT_TABLE2: CreepParams = CreepParams {
-    a: 5.15e-8,
-    n: 0.826,
-    m: 0.0,
-    p: 0.0,
-    q: 0.22,
-    temperature: 1.0,
-    stress_scale: 1.0,
-};
 
 // ---------------------------------------------------------------------------------------------
 // Error
@@ -1415,7 +1404,7 @@ impl Cx<'_> {
         let base = match &c.preset {
             Some(p) => {
                 self.choice(&format!("{key}.preset"), p, &["asphalt_table2"])?;
-                Some(ASPHALT_TABLE2)
+                Some(CreepParams::asphalt_table2(1.0))
             }
             None => None,
         };

@@ -230,6 +230,31 @@ fn pull_back_stress(t: &[[f64; 3]; 3], tau: &[f64; 4]) -> [f64; 3] {
     std::array::from_fn(|i| t[i][0] * tau[0] + t[i][1] * tau[1] + t[i][2] * tau[2])
 }
 
+/// det J₀ and ∂N_a/∂X = ∂N_a/∂ξ J₀⁻¹ at (ξ, η), with J₀ = ∂X/∂ξ the reference Jacobian;
+/// an error if the reference element is inverted there.
+fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [[f64; 2]; 4]), MaterialError> {
+    let dn = shape_derivs(xi, eta);
+    let mut j0 = [[0.0; 2]; 2];
+    for a in 0..4 {
+        for i in 0..2 {
+            for k in 0..2 {
+                j0[i][k] += xx0[a][i] * dn[a][k];
+            }
+        }
+    }
+    let (det_j0, j0_inv) = inv2(&j0);
+    if det_j0 <= 0.0 {
+        return Err(MaterialError::InvertedElement(det_j0));
+    }
+    let mut dn_dx0 = [[0.0; 2]; 4];
+    for a in 0..4 {
+        for k in 0..2 {
+            dn_dx0[a][k] = dn[a][0] * j0_inv[0][k] + dn[a][1] * j0_inv[1][k];
+        }
+    }
+    Ok((det_j0, dn_dx0))
+}
+
 /// Evaluate one element.
 ///
 /// - `xx0`: reference nodal coordinates; `uu`: nodal displacements (mm). Kinematics are
@@ -265,27 +290,7 @@ pub fn evaluate(
 
     // --- deviatoric part, Gauss loop ---
     for (q, gp) in GAUSS.iter().enumerate() {
-        let dn = shape_derivs(gp[0], gp[1]);
-        // reference Jacobian J0 = ∂X/∂ξ
-        let mut j0 = [[0.0; 2]; 2];
-        for a in 0..4 {
-            for i in 0..2 {
-                for k in 0..2 {
-                    j0[i][k] += xx0[a][i] * dn[a][k];
-                }
-            }
-        }
-        let (det_j0, j0_inv) = inv2(&j0);
-        if det_j0 <= 0.0 {
-            return Err(MaterialError::InvertedElement(det_j0));
-        }
-        // ∂N_a/∂X = ∂N_a/∂ξ J0⁻¹
-        let mut dn_dx0 = [[0.0; 2]; 4];
-        for a in 0..4 {
-            for k in 0..2 {
-                dn_dx0[a][k] = dn[a][0] * j0_inv[0][k] + dn[a][1] * j0_inv[1][k];
-            }
-        }
+        let (det_j0, dn_dx0) = reference_gradients(xx0, gp[0], gp[1])?;
         // F = I + Σ u_a ⊗ ∂N_a/∂X
         let mut f2 = [[1.0, 0.0], [0.0, 1.0]];
         for a in 0..4 {
@@ -464,24 +469,8 @@ pub fn evaluate_enhanced(
     }
     let mut gps: [Gp; 4] = std::array::from_fn(|_| Gp { w0: 0.0, dn_dx0: [[0.0; 2]; 4], enh: [[[0.0; 2]; 2]; N_ENH] });
     for (q, gp) in GAUSS.iter().enumerate() {
-        let dn = shape_derivs(gp[0], gp[1]);
-        let mut j0 = [[0.0; 2]; 2];
-        for a in 0..4 {
-            for i in 0..2 {
-                for k in 0..2 {
-                    j0[i][k] += xx0[a][i] * dn[a][k];
-                }
-            }
-        }
-        let (det_j0, j0_inv) = inv2(&j0);
-        if det_j0 <= 0.0 {
-            return Err(MaterialError::InvertedElement(det_j0));
-        }
-        for a in 0..4 {
-            for k in 0..2 {
-                gps[q].dn_dx0[a][k] = dn[a][0] * j0_inv[0][k] + dn[a][1] * j0_inv[1][k];
-            }
-        }
+        let (det_j0, dn_dx0) = reference_gradients(xx0, gp[0], gp[1])?;
+        gps[q].dn_dx0 = dn_dx0;
         gps[q].w0 = det_j0;
         let s = det_jc / det_j0;
         // M_m: (row, column-in-ξη, value)
