@@ -52,3 +52,26 @@ fn two_by_two_discs_lateral_compaction_is_symmetric() {
     assert!(c.pressure[0] > 100.0, "the aluminium discs must be plastic: {:?}", c.pressure);
     assert!(c.stabilisation_energy > 0.0 && c.stabilisation_energy < 0.01 * c.external_work, "{c:?}");
 }
+
+/// Penalty and augmented Lagrangian give the same wall pressure on the 2 × 2 job: within 2 %
+/// at solid ratio 0.94 (the contact issue's criterion for its enforcement methods; Lagrange
+/// multipliers are not implemented yet), and the augmented Lagrangian penetrates less.
+#[test]
+fn penalty_and_augmented_lagrangian_agree_on_the_2x2_job() {
+    let base = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
+    let al = base.replace("method = \"penalty\"", "method = \"augmented_lagrangian\"\npenetration_tol = 1e-4");
+    let at = |reports: &[StepReport], phi: f64| -> (f64, f64) {
+        let c: Vec<_> = reports.iter().map(|r| r.compaction.clone().unwrap()).collect();
+        let k = c.iter().position(|x| x.solid_ratio >= phi).expect("reaches the solid ratio");
+        let (a, b) = (&c[k - 1], &c[k]);
+        let w = (phi - a.solid_ratio) / (b.solid_ratio - a.solid_ratio);
+        (a.pressure[0] + w * (b.pressure[0] - a.pressure[0]), c[..=k].iter().map(|x| x.max_penetration).fold(0.0, f64::max))
+    };
+    let (rp, _) = run(&base);
+    let (ra, _) = run(&al);
+    let (pp, pen_p) = at(&rp, 0.94);
+    let (pa, pen_a) = at(&ra, 0.94);
+    assert!(pp > 50.0, "loaded: {pp}");
+    assert!(((pp - pa) / pp).abs() < 0.02, "penalty {pp} vs augmented Lagrangian {pa} MPa");
+    assert!(pen_a < pen_p, "AL penetration {pen_a} should be below penalty {pen_p}");
+}
