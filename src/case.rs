@@ -476,7 +476,11 @@ impl Case {
             .loads
             .iter()
             .any(|l| matches!(l.kind, LoadKind::Pressure(_)));
-        if symmetric && !follower {
+        use crate::contact::kernels::ContactKind;
+        let contact = !self.walls.is_empty() || self.bodies.len() > 1;
+        let friction = contact
+            && (!matches!(self.contact.kind, ContactKind::Sliding) || self.walls.iter().any(|w| !matches!(w.kind, ContactKind::Sliding)));
+        if symmetric && !follower && !friction {
             LinearSolverKind::Cholesky
         } else {
             LinearSolverKind::Lu

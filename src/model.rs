@@ -233,11 +233,15 @@ impl Model {
         self.amplitudes[i].at(t, self.t_end)
     }
 
-    /// True when every material has a symmetric tangent and no load is a follower pressure,
-    /// so the global tangent is symmetric.
+    /// True when every material has a symmetric tangent, no load is a follower pressure and
+    /// all contact is frictionless, so the global tangent is symmetric.
     pub fn symmetric_tangent(&self) -> bool {
+        use crate::contact::kernels::ContactKind;
+        let frictionless = |k: &ContactKind| matches!(k, ContactKind::Sliding);
+        let contact = !self.walls.is_empty() || self.bodies.len() > 1;
         self.materials.iter().all(|m| m.symmetric_tangent())
             && self.loads.iter().all(|l| !matches!(l.kind, LoadKind::Pressure(_)))
+            && (!contact || (frictionless(&self.contact.kind) && self.walls.iter().all(|w| frictionless(&w.kind))))
     }
 
     /// Reference area of each body (mm²).

@@ -1,0 +1,31 @@
+//! Coulomb friction against a rigid wall (contact issue verification): a block pressed on a
+//! fixed wall with μ = 0.3 and pushed sideways. While it sticks, the tangential force stays
+//! below μN; once the whole base slides, the tangential force equals μN to 1e-6 (the slip
+//! return map puts every node exactly on the Coulomb cone, and the top reactions balance the
+//! wall forces).
+
+use mpfem::case;
+use mpfem::model::Model;
+use mpfem::solver::Simulation;
+
+#[test]
+fn coulomb_block_sticks_then_slides_at_mu_n() {
+    let text = std::fs::read_to_string("jobs/verification/coulomb_block.toml").unwrap();
+    let c = case::parse(&text, std::path::Path::new("jobs/verification")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
+    let mut rows = Vec::new();
+    sim.run(&mut |_, r| rows.push((r.time, r.reactions[0]))).unwrap();
+    let mu = 0.3;
+    // pressing phase: no tangential force
+    let (_, r_press) = rows.iter().find(|(t, _)| (*t - 0.5).abs() < 1e-9).copied().unwrap();
+    assert!(r_press[1] < 0.0, "pressed down: {r_press:?}");
+    assert!(r_press[0].abs() < 1e-9 * r_press[1].abs(), "no shear while pressing: {r_press:?}");
+    // first push step: sticking, |T| < μ N
+    let (_, r_stick) = rows.iter().find(|(t, _)| *t > 0.5 + 1e-9).copied().unwrap();
+    assert!(r_stick[0].abs() > 0.0 && r_stick[0].abs() < mu * r_stick[1].abs(), "stick: {r_stick:?}");
+    // end: sliding, |T| = μ N
+    let (_, r_end) = *rows.last().unwrap();
+    let ratio = r_end[0].abs() / r_end[1].abs();
+    assert!((ratio - mu).abs() < 1e-6 * mu, "sliding: T/N = {ratio}");
+}
