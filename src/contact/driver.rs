@@ -16,6 +16,10 @@ use crate::linalg::CsrMatrix;
 use crate::model::Model;
 use std::collections::HashMap;
 
+/// Gap (relative to the element size) below which a node touches: cohering (tied) pairs are
+/// only created for touching nodes.
+const TOUCH: f64 = 1e-6;
+
 /// A node-to-segment pair frozen for the current step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrozenPair {
@@ -35,6 +39,21 @@ pub struct ContactStats {
     pub max_penetration: f64,
     /// Number of active pairs (node-to-segment and node-to-wall).
     pub active: usize,
+    /// Largest violation of the enforced constraints (mm): penetration, and for tied or
+    /// sticking pairs also the normal separation and the elastic tangential slip. The
+    /// augmented Lagrangian drives it below its tolerance.
+    pub violation: f64,
+}
+
+/// Constraint violation of one active pair (see [`ContactStats::violation`]).
+fn violation(kind: ContactKind, gap: f64, shear: f64, slip: bool, old: &PairHistory, eps_t: f64) -> f64 {
+    let normal = if matches!(kind, ContactKind::Cohering) { gap.abs() } else { (-gap).max(0.0) };
+    let tangential = match kind {
+        ContactKind::Sliding => 0.0,
+        _ if slip || !old.active || !(eps_t > 0.0) => 0.0,
+        _ => ((shear - old.lambda_t) / eps_t).abs(),
+    };
+    normal.max(tangential)
 }
 
 pub struct ContactProblem {
@@ -200,6 +219,13 @@ impl ContactProblem {
             if g.gap < -self.h_of(self.slaves[si].1) {
                 continue; // deeper than an element: not a physical contact of this node
             }
+            // a tie is bilateral: only nodes that touch (or were tied before) are tied
+            if matches!(self.spec.kind, ContactKind::Cohering)
+                && g.gap.abs() > TOUCH * self.h_of(self.slaves[si].1)
+                && !self.nts_hist.get(&(node, seg)).is_some_and(|h| h.active)
+            {
+                continue;
+            }
             match best.get(&si) {
                 Some(&(db, _)) if db <= d => {}
                 _ => {
@@ -211,6 +237,15 @@ impl ContactProblem {
         pairs.sort_by_key(|p| (p.slave, p.segment));
         let changed = pairs != self.pairs;
         self.pairs = pairs;
+        // new tied pairs stick from the start: anchor at the current projection
+        if matches!(self.spec.kind, ContactKind::Cohering) {
+            for p in &self.pairs {
+                let node = self.slaves[p.slave].0;
+                let s = self.segments[p.segment];
+                let xi = kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]).xi;
+                self.nts_hist.entry((node, p.segment)).or_insert(PairHistory { xi_stick: xi, lambda_n: 0.0, lambda_t: 0.0, active: true });
+            }
+        }
         self.trial_nts = self
             .pairs
             .iter()
@@ -249,6 +284,7 @@ impl ContactProblem {
             }
             stats.active += 1;
             stats.max_penetration = stats.max_penetration.max(-out.gap);
+            stats.violation = stats.violation.max(violation(kind, out.gap, out.shear, out.slip, &old, params.eps_t));
             let dofs = [2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
             for i in 0..6 {
                 f_int[dofs[i]] += out.f[i];
@@ -263,6 +299,10 @@ impl ContactProblem {
             // tangential wall motion: the walls move along their normals only
             for (i, &(node, body)) in self.slaves.iter().enumerate() {
                 let old = self.wall_hist[w][i];
+                if self.untied_wall(spec, &wall, x[node], body, &old) {
+                    self.trial_wall[w][i] = PairHistory::default();
+                    continue;
+                }
                 let params = self.params(body, None);
                 kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
                 self.trial_wall[w][i] = wout.new_history;
@@ -271,6 +311,7 @@ impl ContactProblem {
                 }
                 stats.active += 1;
                 stats.max_penetration = stats.max_penetration.max(-wout.gap);
+                stats.violation = stats.violation.max(violation(spec.kind, wout.gap, wout.shear, wout.slip, &old, params.eps_t));
                 stats.wall_force[w] += wout.pressure * self.area[i];
                 let dofs = [2 * node, 2 * node + 1];
                 for c in 0..2 {
@@ -300,11 +341,24 @@ impl ContactProblem {
             let wall = Wall::from_spec(spec, t);
             for (i, &(node, body)) in self.slaves.iter().enumerate() {
                 let old = self.wall_hist[w][i];
+                if self.untied_wall(spec, &wall, x[node], body, &old) {
+                    continue;
+                }
                 let params = self.params(body, None);
                 kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
                 self.wall_hist[w][i] = kernels::augment_wall(&old, &wout);
             }
         }
+    }
+
+    /// A cohering wall ties only nodes that touch it (or were tied before): the kernel's normal
+    /// law is bilateral and would otherwise pull every node towards the wall.
+    fn untied_wall(&self, spec: &WallSpec, wall: &Wall, x: [f64; 2], body: usize, old: &PairHistory) -> bool {
+        if !matches!(spec.kind, ContactKind::Cohering) || old.active {
+            return false;
+        }
+        let g = (x[0] - wall.point[0]) * wall.normal[0] + (x[1] - wall.point[1]) * wall.normal[1];
+        g > TOUCH * self.h_of(body)
     }
 
     /// Whether the augmented Lagrangian asks for another update after a converged solve.
@@ -313,7 +367,7 @@ impl ContactProblem {
             return false;
         }
         let h_min = self.body_h.iter().copied().fold(f64::INFINITY, f64::min);
-        stats.max_penetration > self.spec.penetration_tol * h_min
+        stats.violation > self.spec.penetration_tol * h_min
     }
 
     /// Commit the trial histories of the last evaluation (after a converged step).
