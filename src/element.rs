@@ -230,6 +230,19 @@ fn pull_back_stress(t: &[[f64; 3]; 3], tau: &[f64; 4]) -> [f64; 3] {
     std::array::from_fn(|i| t[i][0] * tau[0] + t[i][1] * tau[1] + t[i][2] * tau[2])
 }
 
+/// F = I + Σ u_a ⊗ ∂N_a/∂X (2×2, from the displacements).
+fn compatible_gradient(uu: &[[f64; 2]; 4], dn_dx0: &[[f64; 2]; 4]) -> [[f64; 2]; 2] {
+    let mut f2 = [[1.0, 0.0], [0.0, 1.0]];
+    for a in 0..4 {
+        for i in 0..2 {
+            for k in 0..2 {
+                f2[i][k] += uu[a][i] * dn_dx0[a][k];
+            }
+        }
+    }
+    f2
+}
+
 /// det J₀ and ∂N_a/∂X = ∂N_a/∂ξ J₀⁻¹ at (ξ, η), with J₀ = ∂X/∂ξ the reference Jacobian;
 /// an error if the reference element is inverted there.
 fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [[f64; 2]; 4]), MaterialError> {
@@ -291,15 +304,7 @@ pub fn evaluate(
     // --- deviatoric part, Gauss loop ---
     for (q, gp) in GAUSS.iter().enumerate() {
         let (det_j0, dn_dx0) = reference_gradients(xx0, gp[0], gp[1])?;
-        // F = I + Σ u_a ⊗ ∂N_a/∂X
-        let mut f2 = [[1.0, 0.0], [0.0, 1.0]];
-        for a in 0..4 {
-            for i in 0..2 {
-                for k in 0..2 {
-                    f2[i][k] += uu[a][i] * dn_dx0[a][k];
-                }
-            }
-        }
+        let f2 = compatible_gradient(uu, &dn_dx0);
         let (jac, f_inv) = inv2(&f2);
         if jac <= 0.0 {
             return Err(MaterialError::InvertedElement(jac));
@@ -491,14 +496,7 @@ pub fn evaluate_enhanced(
         kk = [[0.0; NT]; NT];
         rr = [0.0; NT];
         for (q, gp) in gps.iter().enumerate() {
-            let mut f2 = [[1.0, 0.0], [0.0, 1.0]];
-            for a in 0..4 {
-                for i in 0..2 {
-                    for k in 0..2 {
-                        f2[i][k] += uu[a][i] * gp.dn_dx0[a][k];
-                    }
-                }
-            }
+            let mut f2 = compatible_gradient(uu, &gp.dn_dx0);
             for m in 0..N_ENH {
                 for i in 0..2 {
                     for k in 0..2 {

@@ -629,9 +629,8 @@ impl Simulation {
             let contact_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
                 && updates < self.model.contact.max_augmentations;
             if contact_update {
-                let x = self.coords(&u);
                 if let Some(c) = self.contact.as_mut() {
-                    c.augment(&x, t);
+                    c.augment();
                 }
             }
             if !contact_update && (worst <= self.spec.volume_tol || updates >= self.spec.max_volume_updates) {

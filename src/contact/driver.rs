@@ -73,6 +73,9 @@ pub struct ContactProblem {
     wall_hist: Vec<Vec<PairHistory>>,
     trial_nts: Vec<PairHistory>,
     trial_wall: Vec<Vec<PairHistory>>,
+    /// Uzawa-updated histories of the last evaluation (what `augment` commits).
+    aug_nts: Vec<PairHistory>,
+    aug_wall: Vec<Vec<PairHistory>>,
 }
 
 impl Wall {
@@ -141,6 +144,8 @@ impl ContactProblem {
             wall_hist: vec![vec![PairHistory::default(); ns]; nw],
             trial_nts: Vec::new(),
             trial_wall: vec![vec![PairHistory::default(); ns]; nw],
+            aug_nts: Vec::new(),
+            aug_wall: vec![vec![PairHistory::default(); ns]; nw],
         })
     }
 
@@ -251,6 +256,7 @@ impl ContactProblem {
             .iter()
             .map(|p| self.nts_hist.get(&(self.slaves[p.slave].0, p.segment)).copied().unwrap_or_default())
             .collect();
+        self.aug_nts.clone_from(&self.trial_nts);
         changed
     }
 
@@ -279,6 +285,7 @@ impl ContactProblem {
             let kind = self.spec.kind;
             kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave], kind, &params, &old, &mut out);
             self.trial_nts[k] = out.new_history;
+            self.aug_nts[k] = kernels::augment(&old, &out);
             if !out.active {
                 continue;
             }
@@ -301,11 +308,13 @@ impl ContactProblem {
                 let old = self.wall_hist[w][i];
                 if self.untied_wall(spec, &wall, x[node], body, &old) {
                     self.trial_wall[w][i] = PairHistory::default();
+                    self.aug_wall[w][i] = old;
                     continue;
                 }
                 let params = self.params(body, None);
                 kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
                 self.trial_wall[w][i] = wout.new_history;
+                self.aug_wall[w][i] = kernels::augment_wall(&old, &wout);
                 if !wout.active {
                     continue;
                 }
@@ -325,30 +334,14 @@ impl ContactProblem {
         stats
     }
 
-    /// Uzawa update of every pair's multipliers from the last evaluation at `x`, `t`.
-    pub fn augment(&mut self, x: &[[f64; 2]], t: f64) {
-        let mut out = PairOut::default();
-        for p in self.pairs.clone() {
-            let (node, body) = self.slaves[p.slave];
-            let s = self.segments[p.segment];
-            let old = self.nts_hist.get(&(node, p.segment)).copied().unwrap_or_default();
-            let params = self.params(body, Some(s.body));
-            kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave], self.spec.kind, &params, &old, &mut out);
-            self.nts_hist.insert((node, p.segment), kernels::augment(&old, &out));
+    /// Uzawa update of every pair's multipliers (λ ← the pressure and shear of the last
+    /// evaluation, which [`ContactProblem::add`] has already formed): no kernel is evaluated
+    /// again.
+    pub fn augment(&mut self) {
+        for (k, p) in self.pairs.iter().enumerate() {
+            self.nts_hist.insert((self.slaves[p.slave].0, p.segment), self.aug_nts[k]);
         }
-        let mut wout = WallOut::default();
-        for (w, spec) in self.walls.iter().enumerate() {
-            let wall = Wall::from_spec(spec, t);
-            for (i, &(node, body)) in self.slaves.iter().enumerate() {
-                let old = self.wall_hist[w][i];
-                if self.untied_wall(spec, &wall, x[node], body, &old) {
-                    continue;
-                }
-                let params = self.params(body, None);
-                kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
-                self.wall_hist[w][i] = kernels::augment_wall(&old, &wout);
-            }
-        }
+        self.wall_hist.clone_from(&self.aug_wall);
     }
 
     /// A cohering wall ties only nodes that touch it (or were tied before): the kernel's normal
