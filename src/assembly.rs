@@ -126,6 +126,14 @@ impl Assembler {
     /// As [`Assembler::new`], with extra node groups (e.g. contact pairs: slave node and the
     /// two nodes of its master segment) whose dofs the pattern must couple.
     pub fn with_couplings(model: &Model, eq: Vec<usize>, n_free: usize, extra: &[[usize; 3]]) -> (Self, CsrMatrix) {
+        Self::with_multipliers(model, eq, n_free, extra, &[])
+    }
+
+    /// As [`Assembler::with_couplings`], with Lagrange multipliers appended as equations
+    /// `n_free + k` after the free dofs: multiplier k couples with the global dofs
+    /// `multipliers[k]` (both ways) and has a diagonal entry. The matrix is
+    /// (n_free + m) × (n_free + m).
+    pub fn with_multipliers(model: &Model, eq: Vec<usize>, n_free: usize, extra: &[[usize; 3]], multipliers: &[Vec<usize>]) -> (Self, CsrMatrix) {
         let elem_dofs: Vec<[usize; 8]> = model
             .elements
             .iter()
@@ -138,7 +146,7 @@ impl Assembler {
                 d
             })
             .collect();
-        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n_free];
+        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n_free + multipliers.len()];
         for d in &elem_dofs {
             for &i in d {
                 if eq[i] == FIXED {
@@ -164,11 +172,21 @@ impl Assembler {
                 }
             }
         }
+        for (k, dofs) in multipliers.iter().enumerate() {
+            let m = n_free + k;
+            rows[m].push(m);
+            for &i in dofs {
+                if eq[i] != FIXED {
+                    rows[eq[i]].push(m);
+                    rows[m].push(eq[i]);
+                }
+            }
+        }
         for r in rows.iter_mut() {
             r.sort_unstable();
             r.dedup();
         }
-        let kk = CsrMatrix::from_rows(n_free, &rows);
+        let kk = CsrMatrix::from_rows(rows.len(), &rows);
         let scatter = elem_dofs
             .iter()
             .map(|d| {

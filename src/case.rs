@@ -132,6 +132,34 @@ pub enum ContactMethod {
     Penalty,
     /// Penalty plus Uzawa updates of the multipliers until the penetration is below tolerance.
     AugmentedLagrangian,
+    /// Lagrange multipliers (paper eq. 22–25): one unknown contact force per candidate pair,
+    /// zero penetration, an indefinite system solved by LU. Frictionless contact only.
+    Lagrange,
+}
+
+/// Scope of the contact stabilisation springs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Stabilise {
+    /// Only the directions (x, y) in which a body is not held by its contacts at the start of
+    /// the step (it has no contact pushing it each way); a step that fails is retried with every
+    /// dof stabilised before it is cut back.
+    Unsupported,
+    /// Every free dof of every body, every step.
+    #[default]
+    All,
+}
+
+/// Anchor of the contact stabilisation springs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum StabilisationKind {
+    /// Anchored at the position extrapolated from the last two converged steps,
+    /// u_n + (Δt/Δt_prev)(u_n − u_{n−1}): the springs resist changes of velocity only (like a
+    /// nodal mass k Δt²), so particles that move steadily lose no energy to them.
+    #[default]
+    Inertial,
+    /// Anchored at the last converged position: the springs resist any motion (a dashpot of
+    /// viscosity k Δt).
+    Viscous,
 }
 
 /// The `[contact]` table.
@@ -149,6 +177,10 @@ pub struct ContactSpec {
     /// zeta * E * a / h^2 (a tributary area, h element size), which keeps particles that touch
     /// nothing solvable.
     pub stabilisation: f64,
+    /// Which bodies and directions the stabilisation springs act on.
+    pub stabilise: Stabilise,
+    /// Where the stabilisation springs are anchored.
+    pub stabilisation_kind: StabilisationKind,
     /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
     /// steadies the Newton iterations of weakly held particles without changing the solution
     /// or dissipating energy.
@@ -166,6 +198,8 @@ impl Default for ContactSpec {
             penetration_tol: 0.01,
             max_augmentations: 20,
             stabilisation: 1e-5,
+            stabilise: Stabilise::All,
+            stabilisation_kind: StabilisationKind::Inertial,
             regularisation: 0.0,
             search_distance: None,
         }
@@ -480,7 +514,8 @@ impl Case {
         let contact = !self.walls.is_empty() || self.bodies.len() > 1;
         let friction = contact
             && (!matches!(self.contact.kind, ContactKind::Sliding) || self.walls.iter().any(|w| !matches!(w.kind, ContactKind::Sliding)));
-        if symmetric && !follower && !friction {
+        let lagrange = contact && self.contact.method == ContactMethod::Lagrange;
+        if symmetric && !follower && !friction && !lagrange {
             LinearSolverKind::Cholesky
         } else {
             LinearSolverKind::Lu
@@ -628,6 +663,8 @@ mod raw {
         pub penetration_tol: Option<f64>,
         pub max_augmentations: Option<i64>,
         pub stabilisation: Option<f64>,
+        pub stabilise: Option<String>,
+        pub stabilisation_kind: Option<String>,
         pub regularisation: Option<f64>,
         pub search_distance: Option<f64>,
     }
@@ -1094,6 +1131,21 @@ impl Cx<'_> {
             walls.push(self.wall(&format!("walls[{i}]"), w)?);
         }
         let contact = self.contact(r.contact)?;
+        if contact.method == ContactMethod::Lagrange {
+            use crate::contact::kernels::ContactKind;
+            if !matches!(contact.kind, ContactKind::Sliding) {
+                return Err(self.err(
+                    "contact.method",
+                    "value \"lagrange\": Lagrange multipliers are implemented for frictionless contact only; expected contact.contact = \"sliding\" or method = \"augmented_lagrangian\" (which also ties and rubs)",
+                ));
+            }
+            if let Some(i) = walls.iter().position(|w| !matches!(w.kind, ContactKind::Sliding)) {
+                return Err(self.err(
+                    &format!("walls[{i}].contact"),
+                    "Lagrange multipliers (contact.method = \"lagrange\") are implemented for frictionless contact only; expected \"sliding\" or method = \"augmented_lagrangian\"",
+                ));
+            }
+        }
         let stop = match r.stop {
             None => StopSpec { solid_ratio: None, jam: true },
             Some(st) => StopSpec {
@@ -1149,6 +1201,16 @@ impl Cx<'_> {
             }
         };
         let solver = self.solver(r.solver)?;
+        if contact.method == ContactMethod::Lagrange {
+            if let LinearChoice::Fixed(k) = solver.linear {
+                if k != LinearSolverKind::Lu {
+                    return Err(self.err(
+                        "solver.linear",
+                        format!("value {k:?}: contact.method = \"lagrange\" gives an indefinite system; expected \"lu\" or \"auto\""),
+                    ));
+                }
+            }
+        }
         let output = self.output(r.output, &bodies)?;
 
         Ok(Case {
@@ -1842,8 +1904,9 @@ impl Cx<'_> {
         let mut spec = ContactSpec::default();
         let Some(c) = c else { return Ok(spec) };
         if let Some(m) = c.method {
-            spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian"])? {
+            spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian", "lagrange"])? {
                 "penalty" => ContactMethod::Penalty,
+                "lagrange" => ContactMethod::Lagrange,
                 _ => ContactMethod::AugmentedLagrangian,
             };
         }
@@ -1859,6 +1922,18 @@ impl Cx<'_> {
         }
         if let Some(v) = c.stabilisation {
             spec.stabilisation = self.num("contact.stabilisation", v, v >= 0.0, "a stabilisation factor >= 0")?;
+        }
+        if let Some(v) = c.stabilise {
+            spec.stabilise = match self.choice("contact.stabilise", &v, &["unsupported", "all"])? {
+                "all" => Stabilise::All,
+                _ => Stabilise::Unsupported,
+            };
+        }
+        if let Some(v) = c.stabilisation_kind {
+            spec.stabilisation_kind = match self.choice("contact.stabilisation_kind", &v, &["inertial", "viscous"])? {
+                "viscous" => StabilisationKind::Viscous,
+                _ => StabilisationKind::Inertial,
+            };
         }
         if let Some(v) = c.regularisation {
             spec.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;

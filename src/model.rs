@@ -242,6 +242,7 @@ impl Model {
         self.materials.iter().all(|m| m.symmetric_tangent())
             && self.loads.iter().all(|l| !matches!(l.kind, LoadKind::Pressure(_)))
             && (!contact || (frictionless(&self.contact.kind) && self.walls.iter().all(|w| frictionless(&w.kind))))
+            && (!contact || self.contact.method != crate::case::ContactMethod::Lagrange)
     }
 
     /// Reference area of each body (mm²).

@@ -16,7 +16,7 @@
 //!    discarded and it is retried with Δt · cutback, down to `dt_min`.
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
-use crate::case::WallSide;
+use crate::case::{ContactMethod, StabilisationKind, Stabilise, WallSide};
 use crate::contact::driver::{wall_position, ContactProblem, ContactStats};
 use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
 use crate::element::Volumetric;
@@ -38,6 +38,8 @@ pub enum NewtonFailure {
     Element(#[from] AssemblyError),
     #[error("linear solver: {0}")]
     Linear(String),
+    #[error("the contact active set did not settle in {0} corrections")]
+    ActiveSet(usize),
 }
 
 /// A run that could not go on.
@@ -178,8 +180,16 @@ pub struct Simulation {
     total_cutbacks: usize,
     /// Contact with walls and between bodies (None: nothing can touch).
     pub contact: Option<ContactProblem>,
-    /// Stabilisation spring per dof (N/mm²), zero without contact.
+    /// Stabilisation spring per dof (N/mm²) acting in the current step, zero without contact.
     stab_k: Vec<f64>,
+    /// Stabilisation spring per dof when it acts everywhere (ζ E a / h²).
+    stab_base: Vec<f64>,
+    /// Body of every node.
+    node_body: Vec<usize>,
+    /// Stabilise every dof in the current step (a retry after a failure).
+    stab_all: bool,
+    /// Where the stabilisation springs of the current step are anchored.
+    stab_anchor: Vec<f64>,
     /// Tangent-only regularisation per dof (N/mm²).
     reg_k: Vec<f64>,
     contact_stats: ContactStats,
@@ -199,7 +209,7 @@ impl Simulation {
         let (assembler, kk) = match contact.as_mut() {
             Some(c) => {
                 c.select_pairs(&model.x0);
-                Assembler::with_couplings(&model, eq, n_free, &c.couplings())
+                Assembler::with_multipliers(&model, eq, n_free, &c.couplings(), &c.multiplier_dofs())
             }
             None => Assembler::new(&model, eq, n_free),
         };
@@ -220,6 +230,10 @@ impl Simulation {
         // regularisation ρ·base (tangent only)
         let reg_k: Vec<f64> = stab_k.iter().map(|k| k * model.contact.regularisation).collect();
         stab_k.iter_mut().for_each(|k| *k *= model.contact.stabilisation);
+        let mut node_body = vec![0; model.n_nodes()];
+        for (b, body) in model.bodies.iter().enumerate() {
+            node_body[body.node_offset..body.node_offset + body.mesh.nodes.len()].fill(b);
+        }
         let n_walls = model.walls.len();
         let kind = match spec.linear {
             LinearChoice::Fixed(k) => k,
@@ -282,8 +296,8 @@ impl Simulation {
             trial_fields: ElementFields::new(ne),
             f_int: vec![0.0; n_dofs],
             f_ext: vec![0.0; n_dofs],
-            r: vec![0.0; n_free],
-            du: vec![0.0; n_free],
+            r: vec![0.0; kk.nrows],
+            du: vec![0.0; kk.nrows],
             u_prev: vec![0.0; n_dofs],
             dt_prev: 0.0,
             model,
@@ -304,7 +318,11 @@ impl Simulation {
             total_iterations: 0,
             total_cutbacks: 0,
             contact,
+            stab_base: stab_k.clone(),
             stab_k,
+            node_body,
+            stab_all: false,
+            stab_anchor: vec![0.0; n_dofs],
             reg_k,
             contact_stats: ContactStats::default(),
             stab_energy: 0.0,
@@ -409,8 +427,20 @@ impl Simulation {
             if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
                 c.restore(snap.clone());
             }
-            match self.try_step(dt_try) {
-                Ok(trial) => return Ok(self.commit(dt_try, trial, cutbacks)),
+            let result = self.try_step(dt_try);
+            let partial = self.contact.is_some() && !self.stab_all && self.model.contact.stabilise == Stabilise::Unsupported;
+            match result {
+                Ok(trial) => {
+                    self.stab_all = false;
+                    return Ok(self.commit(dt_try, trial, cutbacks));
+                }
+                Err(cause) if partial && self.model.contact.stabilisation > 0.0 => {
+                    // retry the same step with every dof stabilised before cutting back
+                    tracing::debug!(time = self.sol.time, dt = dt_try, %cause, "step failed with partial stabilisation, retrying with all");
+                    self.stab_all = true;
+                    cutbacks += 1;
+                    self.total_cutbacks += 1;
+                }
                 Err(cause) => {
                     cutbacks += 1;
                     self.total_cutbacks += 1;
@@ -513,18 +543,21 @@ impl Simulation {
         self.f_elem_norm = self.f_int.iter().map(|v| v * v).sum::<f64>().sqrt();
         let t1 = Instant::now();
         if let Some(c) = self.contact.as_mut() {
-            let kk = if tangent { Some((&mut self.kk, self.assembler.eq.as_slice())) } else { None };
+            let kk = if tangent { Some((&mut self.kk, self.assembler.eq.as_slice(), self.assembler.n_free)) } else { None };
             self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk);
             // stabilisation springs (in residual and tangent, dissipate energy) and the
             // tangent-only regularisation (changes the Newton path, not the solution)
+            // (a dof the contacts hold has no spring in the residual but keeps it in the
+            // tangent, where it only steadies the iterations)
             for (d, (&k, &kr)) in self.stab_k.iter().zip(&self.reg_k).enumerate() {
                 if k > 0.0 {
-                    self.f_int[d] += k * (u[d] - self.sol.u[d]);
+                    self.f_int[d] += k * (u[d] - self.stab_anchor[d]);
                 }
                 let q = self.assembler.eq[d];
-                if tangent && q != FIXED && k + kr > 0.0 {
+                let kt = self.stab_base[d] + kr;
+                if tangent && q != FIXED && kt > 0.0 {
                     if let Some(pos) = self.kk.find(q, q) {
-                        self.kk.values[pos] += k + kr;
+                        self.kk.values[pos] += kt;
                     }
                 }
             }
@@ -536,6 +569,14 @@ impl Simulation {
                 let v = self.f_ext[d] - self.f_int[d];
                 self.r[q] = v;
                 norm2 += v * v;
+            }
+        }
+        // Lagrange-multiplier rows: R_λ = −F_λ; c·R_λ is a force, which the norm adds
+        if let Some(c) = self.contact.as_ref() {
+            let n_free = self.assembler.n_free;
+            for (k, (&f, &scale)) in c.lm.rows.iter().zip(&c.lm.scale).enumerate() {
+                self.r[n_free + k] = -f;
+                norm2 += (scale * f).powi(2);
             }
         }
         Ok(norm2.sqrt())
@@ -564,12 +605,32 @@ impl Simulation {
         let t_search = Instant::now();
         if let Some(c) = self.contact.as_mut() {
             let x_n = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + self.sol.u[2 * n], p[1] + self.sol.u[2 * n + 1]]).collect::<Vec<_>>();
+            c.time = self.sol.time;
+            c.wall_reach = c.walls.iter().map(|w| w.velocity.abs() * dt).fold(0.0, f64::max);
             if c.select_pairs(&x_n) {
-                let (assembler, kk) = Assembler::with_couplings(&self.model, self.assembler.eq.clone(), self.assembler.n_free, &c.couplings());
+                let (assembler, kk) = Assembler::with_multipliers(&self.model, self.assembler.eq.clone(), self.assembler.n_free, &c.couplings(), &c.multiplier_dofs());
                 self.assembler = assembler;
+                self.r.resize(kk.nrows, 0.0);
+                self.du.resize(kk.nrows, 0.0);
                 self.kk = kk;
                 if self.assembler.n_free > 0 {
                     self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+                }
+            }
+            // anchor of the springs: the last converged position, or its extrapolation
+            let inertial = self.model.contact.stabilisation_kind == StabilisationKind::Inertial;
+            let s = if inertial && self.dt_prev > 0.0 { dt / self.dt_prev } else { 0.0 };
+            for d in 0..self.stab_anchor.len() {
+                self.stab_anchor[d] = self.sol.u[d] + s * (self.sol.u[d] - self.u_prev[d]);
+            }
+            // stabilisation of this step: every dof, or only the directions the contacts of
+            // the last converged state do not hold
+            if self.stab_all || self.model.contact.stabilise == Stabilise::All {
+                self.stab_k.copy_from_slice(&self.stab_base);
+            } else {
+                let held = c.body_support(&x_n, self.model.bodies.len());
+                for (d, k) in self.stab_k.iter_mut().enumerate() {
+                    *k = if held[self.node_body[d / 2]][d % 2] { 0.0 } else { self.stab_base[d] };
                 }
             }
         }
@@ -626,8 +687,11 @@ impl Simulation {
                     worst = worst.max((self.trial_fields.theta[e] - 1.0).abs());
                 }
             }
-            let contact_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
-                && updates < self.model.contact.max_augmentations;
+            let wants_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats));
+            if wants_update && updates >= self.model.contact.max_augmentations && self.model.contact.method == ContactMethod::Lagrange {
+                return Err(NewtonFailure::ActiveSet(updates));
+            }
+            let contact_update = wants_update && updates < self.model.contact.max_augmentations;
             if contact_update {
                 if let Some(c) = self.contact.as_mut() {
                     c.augment();
@@ -737,12 +801,18 @@ impl Simulation {
             }
             // line search: backtrack while the residual grows or an element fails
             let u0: Vec<f64> = u.to_vec();
+            if let Some(c) = self.contact.as_mut() {
+                c.lm.mark();
+            }
             let mut eta = 1.0;
             let r_old = rnorm;
             let mut accepted = false;
             for _ in 0..6 {
                 for d in 0..u.len() {
                     u[d] = u0[d] + eta * du_full[d];
+                }
+                if let Some(c) = self.contact.as_mut() {
+                    c.lm.step(&self.du[n_free..], eta);
                 }
                 match self.evaluate(u, inc, vol, full) {
                     Ok(rn) => {
@@ -773,7 +843,9 @@ impl Simulation {
 
     /// Commit a converged step: states, displacements, multipliers, time; build its report.
     fn commit(&mut self, dt: f64, trial: Trial, cutbacks: usize) -> StepReport {
-        let stab: f64 = self.stab_k.iter().enumerate().map(|(d, k)| k * (trial.u[d] - self.sol.u[d]).powi(2)).sum();
+        // work done against the stabilisation springs over the step (their force at the end of
+        // the step times the increment)
+        let stab: f64 = self.stab_k.iter().enumerate().map(|(d, k)| k * (trial.u[d] - self.stab_anchor[d]) * (trial.u[d] - self.sol.u[d])).sum();
         self.stab_energy += stab;
         if let Some(c) = self.contact.as_mut() {
             c.commit();

@@ -20,6 +20,10 @@ use std::collections::HashMap;
 /// only created for touching nodes.
 const TOUCH: f64 = 1e-6;
 
+/// A contact normal holds a body in a coordinate direction when its component along that
+/// direction exceeds this (|cos| > 0.2, i.e. within ~78° of the axis).
+pub const SUPPORT_COSINE: f64 = 0.2;
+
 /// A node-to-segment pair frozen for the current step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrozenPair {
@@ -76,6 +80,71 @@ pub struct ContactProblem {
     /// Uzawa-updated histories of the last evaluation (what `augment` commits).
     aug_nts: Vec<PairHistory>,
     aug_wall: Vec<Vec<PairHistory>>,
+    /// Lagrange multipliers (method `lagrange`), see [`Multipliers`].
+    pub lm: Multipliers,
+    /// How far a wall may move in one step (mm): widens the wall candidates of the
+    /// Lagrange multipliers. Set by the driver from the wall speeds and the largest step.
+    pub wall_reach: f64,
+    /// Time of the configuration `select_pairs` is given (s).
+    pub time: f64,
+}
+
+/// A constraint carrying a Lagrange multiplier: a frozen node-to-segment pair (index into the
+/// pairs) or a slave node against a wall.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Candidate {
+    Pair(usize),
+    Wall { wall: usize, slave: usize },
+}
+
+/// Lagrange-multiplier state (paper eq. 22–25), frictionless. One unknown λ_k (a contact
+/// pressure, MPa, same sign as the penalty pressure) per candidate of the step; the contact
+/// force is −λ A ∇g. The complementarity λ ≥ 0, g ≥ 0, λ g = 0 is written as
+/// φ = min(λ, c g) = 0 (c the default penalty, MPa/mm, only a scale): at every evaluation a
+/// candidate with λ − c g > 0 is *active* and its row F_λ = −A g enforces g = 0 (the transpose
+/// of its force column), an inactive one has the row F_λ = −(A/c) λ, which drives λ to zero.
+/// Newton on this semismooth system is the primal–dual active-set method (Hintermüller, Ito &
+/// Kunisch, SIAM J. Optim. 13, 2002); pairs are two-pass like the penalty methods, so the
+/// system may carry dependent rows, which the pivoting LU tolerates.
+#[derive(Clone, Debug, Default)]
+pub struct Multipliers {
+    pub candidates: Vec<Candidate>,
+    /// Current iterate λ (MPa).
+    pub lambda: Vec<f64>,
+    /// λ at the start of the current Newton update (the base of the line search).
+    pub start: Vec<f64>,
+    /// F_λ of the last evaluation, and the scale c that turns c·F_λ into a force (N/mm).
+    pub rows: Vec<f64>,
+    pub scale: Vec<f64>,
+    /// Active set of the current Newton solve.
+    pub active: Vec<bool>,
+    /// Gap of every candidate at the last evaluation (mm).
+    pub gap: Vec<f64>,
+    /// Committed multipliers by candidate key, to start the next step from.
+    committed: HashMap<(u8, usize, usize), f64>,
+    keys: Vec<(u8, usize, usize)>,
+}
+
+impl Multipliers {
+    pub fn len(&self) -> usize {
+        self.candidates.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.candidates.is_empty()
+    }
+
+    /// Remember the current iterate as the base of a Newton update.
+    pub fn mark(&mut self) {
+        self.start.clone_from(&self.lambda);
+    }
+
+    /// λ = start + η Δλ.
+    pub fn step(&mut self, delta: &[f64], eta: f64) {
+        for (k, l) in self.lambda.iter_mut().enumerate() {
+            *l = self.start[k] + eta * delta[k];
+        }
+    }
 }
 
 impl Wall {
@@ -146,6 +215,9 @@ impl ContactProblem {
             trial_wall: vec![vec![PairHistory::default(); ns]; nw],
             aug_nts: Vec::new(),
             aug_wall: vec![vec![PairHistory::default(); ns]; nw],
+            lm: Multipliers::default(),
+            wall_reach: 0.0,
+            time: 0.0,
         })
     }
 
@@ -257,7 +329,164 @@ impl ContactProblem {
             .map(|p| self.nts_hist.get(&(self.slaves[p.slave].0, p.segment)).copied().unwrap_or_default())
             .collect();
         self.aug_nts.clone_from(&self.trial_nts);
+        if self.spec.method == ContactMethod::Lagrange {
+            return self.select_candidates(x, distance) || changed;
+        }
         changed
+    }
+
+    fn lm_key(&self, c: Candidate) -> (u8, usize, usize) {
+        match c {
+            Candidate::Pair(k) => (0, self.slaves[self.pairs[k].slave].0, self.pairs[k].segment),
+            Candidate::Wall { wall, slave } => (1, wall, slave),
+        }
+    }
+
+    /// Lagrange multipliers of the step: every frozen pair, and every slave node closer to a
+    /// wall than the search distance plus `wall_reach` (how far a wall may move in one step);
+    /// λ starts from its committed value. True when the set changed.
+    fn select_candidates(&mut self, x: &[[f64; 2]], distance: f64) -> bool {
+        let mut cands: Vec<Candidate> = (0..self.pairs.len()).map(Candidate::Pair).collect();
+        for (w, spec) in self.walls.iter().enumerate() {
+            let wall = Wall::from_spec(spec, self.time);
+            for (i, &(node, _)) in self.slaves.iter().enumerate() {
+                let g = (x[node][0] - wall.point[0]) * wall.normal[0] + (x[node][1] - wall.point[1]) * wall.normal[1];
+                if g < distance + self.wall_reach {
+                    cands.push(Candidate::Wall { wall: w, slave: i });
+                }
+            }
+        }
+        let keys: Vec<_> = cands.iter().map(|&c| self.lm_key(c)).collect();
+        let changed = keys != self.lm.keys;
+        self.lm.lambda = keys.iter().map(|k| self.lm.committed.get(k).copied().unwrap_or(0.0)).collect();
+        self.lm.active = self.lm.lambda.iter().map(|&l| l > 0.0).collect();
+        self.lm.start.clone_from(&self.lm.lambda);
+        self.lm.rows = vec![0.0; cands.len()];
+        self.lm.gap = vec![0.0; cands.len()];
+        self.lm.scale = vec![0.0; cands.len()];
+        self.lm.candidates = cands;
+        self.lm.keys = keys;
+        changed
+    }
+
+    /// Global dofs each Lagrange multiplier couples with (empty unless method = lagrange).
+    pub fn multiplier_dofs(&self) -> Vec<Vec<usize>> {
+        self.lm
+            .candidates
+            .iter()
+            .map(|&c| match c {
+                Candidate::Pair(k) => {
+                    let p = self.pairs[k];
+                    let s = self.segments[p.segment];
+                    let n = self.slaves[p.slave].0;
+                    vec![2 * n, 2 * n + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1]
+                }
+                Candidate::Wall { slave, .. } => {
+                    let n = self.slaves[slave].0;
+                    vec![2 * n, 2 * n + 1]
+                }
+            })
+            .collect()
+    }
+
+    /// Lagrange-multiplier contributions at configuration `x`, time `t`: forces −λ A ∇g into
+    /// `f_int`, the rows F_λ into `self.lm.rows`, and with a tangent the blocks
+    /// [−λ A ∇∇g, −A ∇g; −A ∇gᵀ, 0] (active) or [0, 0; 0, −A/c] (inactive), the multiplier of
+    /// candidate k being equation `n_free + k`.
+    fn add_lagrange(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize], usize)>) -> ContactStats {
+        let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
+        let walls: Vec<Wall> = self.walls.iter().map(|w| Wall::from_spec(w, t)).collect();
+        let no_penalty = PenaltyParams { eps_n: 0.0, eps_t: 0.0 };
+        let mut out = PairOut::default();
+        for (k, &cand) in self.lm.candidates.iter().enumerate() {
+            let lambda = self.lm.lambda[k];
+            let (dofs, grad, gap, area, c): (Vec<usize>, Vec<f64>, f64, f64, f64) = match cand {
+                Candidate::Pair(q) => {
+                    let p = self.pairs[q];
+                    let (node, body) = self.slaves[p.slave];
+                    let s = self.segments[p.segment];
+                    let (xs, x1, x2) = (x[node], x[s.nodes[0]], x[s.nodes[1]]);
+                    let g = kernels::nts_project(xs, x1, x2);
+                    let area = self.area[p.slave];
+                    let c = self.params(body, Some(s.body)).eps_n;
+                    if !g.gap.is_finite() {
+                        self.lm.rows[k] = -(area / c) * lambda;
+                        self.lm.scale[k] = c;
+                        self.trial_nts[q] = PairHistory::default();
+                        continue;
+                    }
+                    let (n, xi) = (g.normal, g.xi);
+                    let grad = vec![n[0], n[1], -(1.0 - xi) * n[0], -(1.0 - xi) * n[1], -xi * n[0], -xi * n[1]];
+                    let dofs = vec![2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
+                    // force and geometric stiffness of the pressure λ: the penalty kernel with a
+                    // zero penalty and λ as its multiplier
+                    if lambda > 0.0 {
+                        let hist = PairHistory { xi_stick: xi, lambda_n: lambda, lambda_t: 0.0, active: true };
+                        kernels::nts_pair(xs, x1, x2, area, ContactKind::Sliding, &no_penalty, &hist, &mut out);
+                        if let Some((m, eq, _)) = kk.as_mut() {
+                            add_block(m, eq, &[dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]], &out.k);
+                        }
+                    }
+                    (dofs, grad, g.gap, area, c)
+                }
+                Candidate::Wall { wall, slave } => {
+                    let (node, body) = self.slaves[slave];
+                    let w = &walls[wall];
+                    let n = w.normal;
+                    let gap = (x[node][0] - w.point[0]) * n[0] + (x[node][1] - w.point[1]) * n[1];
+                    (vec![2 * node, 2 * node + 1], vec![n[0], n[1]], gap, self.area[slave], self.params(body, None).eps_n)
+                }
+            };
+            // the force −λ A ∇g acts whatever the active set: an inactive candidate's row
+            // drives its λ to zero in one Newton update, and its column removes the force
+            for (i, &d) in dofs.iter().enumerate() {
+                f_int[d] -= lambda * area * grad[i];
+            }
+            let active = lambda - c * gap > 0.0;
+            self.lm.scale[k] = c;
+            self.lm.gap[k] = gap;
+            self.lm.active[k] = active;
+            self.lm.rows[k] = if active { -area * gap } else { -(area / c) * lambda };
+            if let Some((m, eq, n_free)) = kk.as_mut() {
+                let row = *n_free + k;
+                for (i, &d) in dofs.iter().enumerate() {
+                    let q = eq[d];
+                    if q == FIXED {
+                        continue;
+                    }
+                    let v = -area * grad[i];
+                    if let Some(pos) = m.find(q, row) {
+                        m.values[pos] += v;
+                    }
+                    if active {
+                        if let Some(pos) = m.find(row, q) {
+                            m.values[pos] += v;
+                        }
+                    }
+                }
+                if !active {
+                    if let Some(pos) = m.find(row, row) {
+                        m.values[pos] += -area / c;
+                    }
+                }
+            }
+            let carries = active && lambda > 0.0;
+            let hist = PairHistory { xi_stick: 0.0, lambda_n: if carries { lambda } else { 0.0 }, lambda_t: 0.0, active: carries };
+            match cand {
+                Candidate::Pair(q) => self.trial_nts[q] = hist,
+                Candidate::Wall { wall, slave } => {
+                    self.trial_wall[wall][slave] = hist;
+                    if carries {
+                        stats.wall_force[wall] += lambda * area;
+                    }
+                }
+            }
+            if carries {
+                stats.active += 1;
+                stats.max_penetration = stats.max_penetration.max(-gap);
+            }
+        }
+        stats
     }
 
     /// Node triples (slave, master 1, master 2) that the sparsity pattern must couple.
@@ -274,7 +503,10 @@ impl ContactProblem {
     /// Add the contact forces to `f_int` and, with a tangent, their derivative to `kk`, at
     /// configuration `x` and time `t`. Histories are read from the committed state (for the
     /// augmented Lagrangian, the current multipliers); the trial histories are kept for commit.
-    pub fn add(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize])>) -> ContactStats {
+    pub fn add(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize], usize)>) -> ContactStats {
+        if self.spec.method == ContactMethod::Lagrange {
+            return self.add_lagrange(x, t, f_int, kk);
+        }
         let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
         let mut out = PairOut::default();
         for (k, p) in self.pairs.iter().enumerate() {
@@ -296,7 +528,7 @@ impl ContactProblem {
             for i in 0..6 {
                 f_int[dofs[i]] += out.f[i];
             }
-            if let Some((m, eq)) = kk.as_mut() {
+            if let Some((m, eq, _)) = kk.as_mut() {
                 add_block(m, eq, &dofs, &out.k);
             }
         }
@@ -326,7 +558,7 @@ impl ContactProblem {
                 for c in 0..2 {
                     f_int[dofs[c]] += wout.f[c];
                 }
-                if let Some((m, eq)) = kk.as_mut() {
+                if let Some((m, eq, _)) = kk.as_mut() {
                     add_block(m, eq, &dofs, &wout.k);
                 }
             }
@@ -354,6 +586,50 @@ impl ContactProblem {
         g > TOUCH * self.h_of(body)
     }
 
+    /// Which directions (x, y) of each body the committed contacts hold: a body is held in x
+    /// when it has an active contact pushing it towards +x and another pushing it towards −x
+    /// (normal components beyond [`SUPPORT_COSINE`]), likewise in y. Node-to-segment pairs
+    /// count for both bodies (with opposite normals), wall pairs for the particle. `x` is the
+    /// committed configuration.
+    pub fn body_support(&self, x: &[[f64; 2]], n_bodies: usize) -> Vec<[bool; 2]> {
+        // pushes[body][dir] = (towards +, towards −)
+        let mut pushes = vec![[(false, false); 2]; n_bodies];
+        let mut mark = |body: usize, n: [f64; 2]| {
+            for c in 0..2 {
+                if n[c] > SUPPORT_COSINE {
+                    pushes[body][c].0 = true;
+                } else if n[c] < -SUPPORT_COSINE {
+                    pushes[body][c].1 = true;
+                }
+            }
+        };
+        let body_of: HashMap<usize, usize> = self.slaves.iter().copied().collect();
+        for (&(node, seg), h) in &self.nts_hist {
+            if !h.active {
+                continue;
+            }
+            let s = self.segments[seg];
+            let g = kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]);
+            if !g.length.is_finite() || g.length <= 0.0 {
+                continue;
+            }
+            // the master's outward normal pushes the slave along +n and the master along −n
+            if let Some(&b) = body_of.get(&node) {
+                mark(b, g.normal);
+            }
+            mark(s.body, [-g.normal[0], -g.normal[1]]);
+        }
+        for (w, spec) in self.walls.iter().enumerate() {
+            let wall = Wall::from_spec(spec, 0.0);
+            for (i, &(_, body)) in self.slaves.iter().enumerate() {
+                if self.wall_hist[w][i].active {
+                    mark(body, wall.normal);
+                }
+            }
+        }
+        pushes.iter().map(|p| [p[0].0 && p[0].1, p[1].0 && p[1].1]).collect()
+    }
+
     /// Whether the augmented Lagrangian asks for another update after a converged solve.
     pub fn needs_augmentation(&self, stats: &ContactStats) -> bool {
         if self.spec.method != ContactMethod::AugmentedLagrangian {
@@ -372,6 +648,9 @@ impl ContactProblem {
         }
         self.nts_hist = next;
         self.wall_hist.clone_from(&self.trial_wall);
+        if self.spec.method == ContactMethod::Lagrange {
+            self.lm.committed = self.lm.keys.iter().zip(&self.lm.lambda).filter(|(_, &l)| l > 0.0).map(|(k, &l)| (*k, l)).collect();
+        }
     }
 
     /// Forget augmented multipliers of a failed step: restore from the committed state.
