@@ -52,6 +52,7 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         contact: Default::default(),
         stop: Default::default(),
         materials: vec![material.clone()],
+        densities: vec![2.7e-9],
         x0: mesh.nodes.clone(),
         elements: mesh.elements.clone(),
         elem_material: vec![0; ne],

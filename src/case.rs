@@ -405,6 +405,8 @@ pub struct TimeSpec {
     pub cutback: f64,
     pub easy_iterations: usize,
     pub max_steps: usize,
+    /// Quasi-static (default) or implicit dynamics (Newmark, HHT-α).
+    pub integrator: crate::dynamics::Integrator,
 }
 
 impl TimeSpec {
@@ -419,6 +421,7 @@ impl TimeSpec {
             cutback: 0.5,
             easy_iterations: 6,
             max_steps: 100_000,
+            integrator: crate::dynamics::Integrator::Static,
         }
     }
 }
@@ -821,6 +824,10 @@ mod raw {
         pub cutback: Option<f64>,
         pub easy_iterations: Option<i64>,
         pub max_steps: Option<i64>,
+        pub integrator: Option<String>,
+        pub hht_alpha: Option<f64>,
+        pub newmark_beta: Option<f64>,
+        pub newmark_gamma: Option<f64>,
     }
 
     #[derive(Deserialize)]
@@ -1103,6 +1110,8 @@ impl Cx<'_> {
         };
 
         let raw_materials = r.materials.unwrap_or_default();
+        // a density must be given explicitly when the analysis is dynamic (checked below)
+        let density_given: Vec<bool> = raw_materials.iter().map(|m| m.density.is_some()).collect();
         if raw_materials.is_empty() {
             return Err(self.err(
                 "materials",
@@ -1200,6 +1209,17 @@ impl Cx<'_> {
                 ))
             }
         };
+        if time.integrator.is_dynamic() {
+            if let Some(i) = density_given.iter().position(|given| !given) {
+                return Err(self.err(
+                    &format!("materials[{i}].density"),
+                    format!(
+                        "missing for material \"{}\"; expected a density > 0 (t/mm^3): the dynamic integrator (time.integrator) needs the mass of every material",
+                        materials[i].name
+                    ),
+                ));
+            }
+        }
         let solver = self.solver(r.solver)?;
         if contact.method == ContactMethod::Lagrange {
             if let LinearChoice::Fixed(k) = solver.linear {
@@ -2244,7 +2264,70 @@ impl Cx<'_> {
         if let Some(v) = t.max_steps {
             s.max_steps = self.count("time.max_steps", v, 1)?;
         }
+        s.integrator = self.integrator(&t)?;
+        // accuracy of a dynamic analysis is set by the step, not by the Newton iterations:
+        // unless asked otherwise the step does not grow
+        if s.integrator.is_dynamic() && t.dt_max.is_none() {
+            s.dt_max = dt;
+        }
         Ok(s)
+    }
+
+    /// `[time] integrator` and its parameters.
+    fn integrator(&self, t: &raw::Time) -> Result<crate::dynamics::Integrator, CaseError> {
+        use crate::dynamics::Integrator;
+        let kind = match &t.integrator {
+            None => "static",
+            Some(v) => self.choice("time.integrator", v, &["static", "newmark", "hht"])?,
+        };
+        let only = |key: &str, given: bool, with: &str| -> Result<(), CaseError> {
+            if given && kind != with {
+                return Err(self.err(
+                    key,
+                    format!("not allowed with integrator = \"{kind}\"; expected only with integrator = \"{with}\""),
+                ));
+            }
+            Ok(())
+        };
+        only("time.hht_alpha", t.hht_alpha.is_some(), "hht")?;
+        only("time.newmark_beta", t.newmark_beta.is_some(), "newmark")?;
+        only("time.newmark_gamma", t.newmark_gamma.is_some(), "newmark")?;
+        Ok(match kind {
+            "newmark" => {
+                let gamma = match t.newmark_gamma {
+                    None => 0.5,
+                    Some(g) => self.num(
+                        "time.newmark_gamma",
+                        g,
+                        (0.5..=1.0).contains(&g),
+                        "a Newmark gamma in [0.5, 1] (unconditional stability needs gamma >= 0.5)",
+                    )?,
+                };
+                let beta = match t.newmark_beta {
+                    None => 0.25 * (gamma + 0.5) * (gamma + 0.5),
+                    Some(b) => self.num(
+                        "time.newmark_beta",
+                        b,
+                        b >= 0.5 * gamma && b <= 1.0,
+                        &format!("a Newmark beta in [gamma/2, 1] = [{:?}, 1] (unconditional stability needs 2 beta >= gamma)", 0.5 * gamma),
+                    )?,
+                };
+                Integrator::Newmark { beta, gamma }
+            }
+            "hht" => {
+                let alpha = match t.hht_alpha {
+                    None => -0.05,
+                    Some(a) => self.num(
+                        "time.hht_alpha",
+                        a,
+                        (-1.0 / 3.0..=0.0).contains(&a),
+                        "an HHT alpha in [-1/3, 0]",
+                    )?,
+                };
+                Integrator::Hht { alpha }
+            }
+            _ => Integrator::Static,
+        })
     }
 
     fn solver(&self, r: Option<raw::Solver>) -> Result<SolverSpec, CaseError> {

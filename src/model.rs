@@ -63,6 +63,8 @@ pub struct Model {
     pub contact: crate::case::ContactSpec,
     pub stop: crate::case::StopSpec,
     pub materials: Vec<Material>,
+    /// Mass density of each material (t/mm³), used by the implicit dynamics.
+    pub densities: Vec<f64>,
     pub bodies: Vec<Body>,
     /// Reference coordinates of all nodes (mm).
     pub x0: Vec<[f64; 2]>,
@@ -206,6 +208,7 @@ impl Model {
             contact: case.contact.clone(),
             stop: case.stop.clone(),
             materials: case.materials.iter().map(|m| m.material.clone()).collect(),
+            densities: case.materials.iter().map(|m| m.density).collect(),
             bodies,
             x0,
             elements,

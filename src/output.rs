@@ -51,6 +51,7 @@ pub fn history_columns(model: &Model) -> Vec<String> {
         "volume_error",
         "volume_error_max_body",
         "max_element_volume_change",
+        "kinetic_energy",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -83,7 +84,7 @@ impl HistoryWriter {
     pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
         write!(
             self.out,
-            "{},{:.9e},{:.6e},{},{},{},{:.3e},{:.6e},{:.6e},{:.6e}",
+            "{},{:.9e},{:.6e},{},{},{},{:.3e},{:.6e},{:.6e},{:.6e},{:.9e}",
             r.step,
             r.time,
             r.dt,
@@ -93,7 +94,8 @@ impl HistoryWriter {
             r.residual,
             r.volume_error,
             r.volume_error_max_body,
-            r.max_element_volume_change
+            r.max_element_volume_change,
+            r.kinetic_energy
         )?;
         if let Some(c) = &r.compaction {
             write!(self.out, ",{:.9e}", c.solid_ratio)?;

@@ -19,6 +19,7 @@ use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields,
 use crate::case::{ContactMethod, StabilisationKind, Stabilise, WallSide};
 use crate::contact::driver::{wall_position, ContactProblem, ContactStats};
 use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
+use crate::dynamics::Dynamics;
 use crate::element::Volumetric;
 use crate::linalg::{make_solver, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
 use crate::material::{ConstitutiveLaw, TimeIncrement};
@@ -78,6 +79,8 @@ pub struct StepReport {
     pub displacements: Vec<[f64; 2]>,
     /// Compaction quantities, when the model has walls or several bodies.
     pub compaction: Option<Compaction>,
+    /// Kinetic energy ½ vᵀ M v (N·mm/mm); 0 in a quasi-static analysis.
+    pub kinetic_energy: f64,
 }
 
 /// Compaction quantities of a step (walls that do not exist report 0).
@@ -160,6 +163,8 @@ pub struct Simulation {
     kk: CsrMatrix,
     linear: Box<dyn LinearSolver>,
     linear_name: String,
+    /// Newmark / HHT-α state of an implicit dynamic analysis (None: quasi-static).
+    dynamics: Option<Dynamics>,
     pool: Option<rayon::ThreadPool>,
     /// Volumetric data per element (κ and whether it is an incompressible body).
     kappa: Vec<f64>,
@@ -292,7 +297,8 @@ impl Simulation {
         // forces below this are round-off: G · L · 1e-13 with L = √(total area)
         let force_floor = 1e-13 * g_max * area0_total.abs().sqrt();
         let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne] };
-        Ok(Self {
+        let dynamics = Dynamics::from_model(time.integrator, &model);
+        let mut sim = Self {
             trial_fields: ElementFields::new(ne),
             f_int: vec![0.0; n_dofs],
             f_ext: vec![0.0; n_dofs],
@@ -308,6 +314,7 @@ impl Simulation {
             kk,
             linear,
             linear_name,
+            dynamics,
             pool,
             kappa,
             incompressible,
@@ -330,7 +337,27 @@ impl Simulation {
             last_wall_force: vec![0.0; n_walls],
             f_elem_norm: 0.0,
             timing: Timing::default(),
-        })
+        };
+        sim.start_dynamics()?;
+        Ok(sim)
+    }
+
+    /// Initial state of an implicit dynamic analysis (nothing when quasi-static): v_0 = 0 and
+    /// the acceleration consistent with F_ext(t_0) − F_int(u_0), see [`Dynamics::start`].
+    fn start_dynamics(&mut self) -> Result<(), SolveError> {
+        let Some(mut dy) = self.dynamics.take() else { return Ok(()) };
+        let u0 = self.sol.u.clone();
+        let vol = self.volumetric(&self.sol.lambda);
+        let inc = TimeIncrement { time: self.sol.time, dt: self.time.dt };
+        self.evaluate(&u0, inc, &vol, false).map_err(|e| SolveError::StepFailed {
+            time: self.sol.time,
+            dt: 0.0,
+            dt_min: self.time.dt_min,
+            cause: e.into(),
+        })?;
+        dy.start(&u0, &self.f_int, &self.f_ext, &self.assembler.eq);
+        self.dynamics = Some(dy);
+        Ok(())
     }
 
     pub fn n_free(&self) -> usize {
@@ -563,6 +590,10 @@ impl Simulation {
             }
         }
         self.timing.contact_assembly += t1.elapsed().as_secs_f64();
+        // implicit dynamics: inertia (HHT-weighted) in F_int, M/((1+α)βΔt²) on the diagonal
+        if let Some(dy) = self.dynamics.as_ref() {
+            dy.add_inertia(u, inc.dt, &self.assembler.eq, &mut self.f_int, tangent.then_some(&mut self.kk));
+        }
         let mut norm2 = 0.0;
         for (d, &q) in self.assembler.eq.iter().enumerate() {
             if q != FIXED {
@@ -648,7 +679,10 @@ impl Simulation {
         for p in &self.model.prescribed {
             u[p.dof] = p.value * self.model.amplitude(p.amplitude, t);
         }
-        if self.dt_prev == 0.0 {
+        if let Some(dy) = self.dynamics.as_ref() {
+            dy.predict(&mut u, dt, &self.assembler.eq); // Newmark predictor (a_{n+1} = 0)
+        }
+        if self.dt_prev == 0.0 && self.dynamics.is_none() {
             // no increment to extrapolate (first step): linearised prediction instead
             if let Err(e) = self.tangent_predictor(&mut u, inc) {
                 tracing::debug!(%e, "tangent predictor skipped");
@@ -854,6 +888,9 @@ impl Simulation {
         self.sol.u = trial.u;
         self.sol.lambda = trial.lambda;
         std::mem::swap(&mut self.sol.fields, &mut self.trial_fields);
+        if let Some(dy) = self.dynamics.as_mut() {
+            dy.commit(&self.sol.u, dt, &self.f_int, &self.f_ext);
+        }
         self.sol.time += dt;
         self.dt_prev = dt;
         self.step += 1;
@@ -939,6 +976,7 @@ impl Simulation {
             max_element_volume_change: trial.worst,
             reactions,
             displacements,
+            kinetic_energy: self.dynamics.as_ref().map_or(0.0, |dy| dy.kinetic_energy()),
         }
     }
 }

@@ -7,6 +7,7 @@ use mpfem::case::{
     self, Amplitude, CaseError, Formulation, LinearChoice, LoadKind, NewtonKind, ShapeSpec,
     SolverSpec, TimeSpec,
 };
+use mpfem::dynamics::Integrator;
 use mpfem::linalg::{LinearSolverKind, Preconditioner};
 use mpfem::material::Material;
 
@@ -327,6 +328,46 @@ fn other_validation_errors() {
 }
 
 #[test]
+fn dynamic_integrator_keys() {
+    let dynamic = |keys: &str| with("dt = 0.1", &format!("dt = 0.1\n{keys}"));
+    let dense = |text: String| text.replace("poisson_ratio = 0.3", "poisson_ratio = 0.3\ndensity = 2.7e-9");
+    // the density is required, naming the material
+    let e = err_of(&dynamic("integrator = \"newmark\""));
+    assert_eq!(e.key, "materials[0].density");
+    assert_has(&e, &["\"alu\"", "density > 0", "time.integrator"]);
+    // bad choice, out-of-range and misplaced parameters
+    let e = err_of(&dense(dynamic("integrator = \"explicit\"")));
+    assert_has(&e, &["time.integrator", "\"explicit\"", "\"newmark\"", "\"hht\""]);
+    let e = err_of(&dense(dynamic("integrator = \"hht\"\nhht_alpha = 0.1")));
+    assert_eq!(e.key, "time.hht_alpha");
+    assert_has(&e, &["value 0.1", "[-1/3, 0]"]);
+    let e = err_of(&dense(dynamic("integrator = \"hht\"\nhht_alpha = -0.5")));
+    assert_has(&e, &["time.hht_alpha", "-0.5"]);
+    let e = err_of(&dense(dynamic("integrator = \"newmark\"\nhht_alpha = -0.1")));
+    assert_eq!(e.key, "time.hht_alpha");
+    assert_has(&e, &["not allowed", "\"newmark\"", "\"hht\""]);
+    let e = err_of(&dense(dynamic("newmark_beta = 0.25")));
+    assert_has(&e, &["time.newmark_beta", "\"static\""]);
+    let e = err_of(&dense(dynamic("integrator = \"newmark\"\nnewmark_gamma = 0.4")));
+    assert_has(&e, &["time.newmark_gamma", "value 0.4", "[0.5, 1]"]);
+    let e = err_of(&dense(dynamic("integrator = \"newmark\"\nnewmark_beta = 0.1")));
+    assert_has(&e, &["time.newmark_beta", "value 0.1", "[0.25, 1]"]);
+    // defaults: HHT α = −0.05, trapezoidal Newmark, β from γ, the step does not grow
+    let c = parse(&dense(dynamic("integrator = \"hht\""))).unwrap();
+    assert_eq!(c.time.integrator, Integrator::Hht { alpha: -0.05 });
+    assert_eq!(c.time.dt_max, 0.1);
+    let c = parse(&dense(dynamic("integrator = \"newmark\"\ndt_max = 0.5"))).unwrap();
+    assert_eq!(c.time.integrator, Integrator::Newmark { beta: 0.25, gamma: 0.5 });
+    assert_eq!(c.time.dt_max, 0.5);
+    let c = parse(&dense(dynamic("integrator = \"newmark\"\nnewmark_gamma = 0.6"))).unwrap();
+    let Integrator::Newmark { beta, gamma } = c.time.integrator else { panic!("{:?}", c.time.integrator) };
+    assert_eq!(gamma, 0.6);
+    assert!((beta - 0.3025).abs() < 1e-15);
+    // quasi-static cases need no density
+    assert_eq!(parse(&dynamic("integrator = \"static\"")).unwrap().time.integrator, Integrator::Static);
+}
+
+#[test]
 fn error_display_is_key_colon_message() {
     let e = CaseError::new("time.dt", "value 2.0; expected 0 < dt <= end");
     assert_eq!(e.to_string(), "time.dt: value 2.0; expected 0 < dt <= end");
@@ -429,7 +470,8 @@ fn defaults_are_applied() {
             growth: 1.5,
             cutback: 0.5,
             easy_iterations: 6,
-            max_steps: 100_000
+            max_steps: 100_000,
+            integrator: Integrator::Static,
         }
     );
     let s = c.solver;
