@@ -53,13 +53,15 @@ fn two_by_two_discs_lateral_compaction_is_symmetric() {
     assert!(c.stabilisation_energy > 0.0 && c.stabilisation_energy < 0.01 * c.external_work, "{c:?}");
 }
 
-/// Penalty and augmented Lagrangian give the same wall pressure on the 2 × 2 job: within 2 %
-/// at solid ratio 0.94 (the contact issue's criterion for its enforcement methods; Lagrange
-/// multipliers are not implemented yet), and the augmented Lagrangian penetrates less.
+/// The three enforcement methods give the same wall pressure on the 2 × 2 job: penalty,
+/// augmented Lagrangian and Lagrange multipliers within 2 % of each other at solid ratio 0.94
+/// (the contact issue's criterion), the augmented Lagrangian penetrates less than the penalty
+/// and the Lagrange multipliers not at all (round-off: 1e-9 × the element size).
 #[test]
-fn penalty_and_augmented_lagrangian_agree_on_the_2x2_job() {
+fn the_three_enforcement_methods_agree_on_the_2x2_job() {
     let base = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
     let al = base.replace("method = \"penalty\"", "method = \"augmented_lagrangian\"\npenetration_tol = 1e-4");
+    let lm = base.replace("method = \"penalty\"", "method = \"lagrange\"");
     let at = |reports: &[StepReport], phi: f64| -> (f64, f64) {
         let c: Vec<_> = reports.iter().map(|r| r.compaction.clone().unwrap()).collect();
         let k = c.iter().position(|x| x.solid_ratio >= phi).expect("reaches the solid ratio");
@@ -69,9 +71,15 @@ fn penalty_and_augmented_lagrangian_agree_on_the_2x2_job() {
     };
     let (rp, _) = run(&base);
     let (ra, _) = run(&al);
+    let (rl, _) = run(&lm);
     let (pp, pen_p) = at(&rp, 0.94);
     let (pa, pen_a) = at(&ra, 0.94);
+    let (pl, pen_l) = at(&rl, 0.94);
+    eprintln!("p_left at solid ratio 0.94: penalty {pp:.3}, augmented Lagrangian {pa:.3}, Lagrange {pl:.3} MPa; penetration {pen_p:.3e}, {pen_a:.3e}, {pen_l:.3e} mm");
     assert!(pp > 50.0, "loaded: {pp}");
     assert!(((pp - pa) / pp).abs() < 0.02, "penalty {pp} vs augmented Lagrangian {pa} MPa");
+    assert!(((pp - pl) / pp).abs() < 0.02, "penalty {pp} vs Lagrange multipliers {pl} MPa");
+    assert!(((pa - pl) / pa).abs() < 0.02, "augmented Lagrangian {pa} vs Lagrange multipliers {pl} MPa");
     assert!(pen_a < pen_p, "AL penetration {pen_a} should be below penalty {pen_p}");
+    assert!(pen_l < 1e-9 * 4.0, "Lagrange multipliers must not penetrate: {pen_l} mm");
 }

@@ -1,0 +1,122 @@
+//! The 2 × 2 compaction jobs of the contact issue, run end to end exactly as shipped in
+//! `jobs/compaction/`: lateral, vertical and biaxial compaction of four aluminium discs (Table 1
+//! hardening), frictionless and with Coulomb friction μ = 0.2, to solid ratio 0.95.
+//!
+//! Every job must
+//! - stop because the target solid ratio 0.95 was reached (not on a jam, not on a failure);
+//! - keep the stabilisation work below 1 % of the external work (the issue's criterion, the
+//!   Abaqus ALLSD/ALLIE practice);
+//! - conserve the particle area to 1 % (J2 plastic flow is isochoric; what is left is elastic
+//!   dilatation, p/K ≈ 200/53000 ≈ 0.4 %);
+//! - stay symmetric: the set-up (die, grid, meshes, walls, friction) is symmetric about both
+//!   axes of the die, so the displacement at a node and at its mirror image must agree, to
+//!   1e-8 of the largest displacement (the issue's criterion), and the opposite moving walls
+//!   must carry the same pressure (1e-8 relative).
+
+use mpfem::case;
+use mpfem::model::Model;
+use mpfem::solver::{Compaction, Simulation};
+use std::collections::HashMap;
+
+/// Tolerance of the symmetry checks (relative to the largest displacement / the pressure).
+const SYMMETRY_TOL: f64 = 1e-8;
+
+fn run_job(name: &str) -> (Simulation, Compaction, String) {
+    let path = format!("jobs/compaction/{name}");
+    let c = case::load(std::path::Path::new(&path)).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
+    let summary = sim.run(&mut |_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let last = summary.last.as_ref().and_then(|r| r.compaction.clone()).expect("a compaction report");
+    eprintln!(
+        "{name}: {} steps, {} Newton iterations, {} cut-backs, solid ratio {:.4}, p = {:?} MPa, stabilisation/external work {:.3e}, volume error {:.3e}",
+        summary.steps,
+        summary.newton_iterations,
+        summary.cutbacks,
+        last.solid_ratio,
+        last.pressure,
+        last.stabilisation_energy / last.external_work,
+        summary.last.as_ref().unwrap().volume_error
+    );
+    (sim, last, summary.stop_reason)
+}
+
+/// Largest mismatch of the displacement field under the mirror x → 2 c − x (axis 0) or
+/// y → 2 c − y (axis 1), relative to the largest displacement. Panics if a node has no mirror
+/// image (the meshes would not be symmetric).
+fn mirror_mismatch(sim: &Simulation, axis: usize, centre: f64) -> f64 {
+    let x0 = &sim.model.x0;
+    let u = &sim.sol.u;
+    let scale = x0.iter().flat_map(|p| p.iter()).fold(0.0_f64, |m, v| m.max(v.abs())).max(1.0);
+    let key = |p: [f64; 2]| ((p[0] / scale * 1e9).round() as i64, (p[1] / scale * 1e9).round() as i64);
+    let index: HashMap<(i64, i64), usize> = x0.iter().enumerate().map(|(n, &p)| (key(p), n)).collect();
+    let umax = u.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let mut worst: f64 = 0.0;
+    for (n, &p) in x0.iter().enumerate() {
+        let mut q = p;
+        q[axis] = 2.0 * centre - p[axis];
+        let m = *index.get(&key(q)).unwrap_or_else(|| panic!("node {n} at {p:?} has no mirror image"));
+        for c in 0..2 {
+            let sign = if c == axis { -1.0 } else { 1.0 };
+            worst = worst.max((u[2 * n + c] - sign * u[2 * m + c]).abs());
+        }
+    }
+    worst / umax
+}
+
+fn check(name: &str, moving: &[usize]) {
+    let (sim, last, stop) = run_job(name);
+    assert_eq!(stop, "solid ratio reached", "{name}");
+    assert!(last.solid_ratio >= 0.95, "{name}: {}", last.solid_ratio);
+    assert!(last.external_work > 0.0);
+    let ratio = last.stabilisation_energy / last.external_work;
+    assert!(ratio < 0.01, "{name}: stabilisation work {ratio:.3e} of the external work");
+    let vol = sim.model.body_areas(&sim.coords(&sim.sol.u)).iter().sum::<f64>();
+    let vol0 = sim.model.body_areas(&sim.model.x0).iter().sum::<f64>();
+    assert!(((vol - vol0) / vol0).abs() < 0.01, "{name}: area change {}", (vol - vol0) / vol0);
+    for &w in moving {
+        assert!(last.pressure[w] > 50.0, "{name}: wall {w} must be loaded: {:?}", last.pressure);
+    }
+    // opposite walls (left/right = 0/1, bottom/top = 2/3)
+    for (a, b) in [(0, 1), (2, 3)] {
+        let (pa, pb) = (last.pressure[a], last.pressure[b]);
+        if pa > 0.0 || pb > 0.0 {
+            let rel = (pa - pb).abs() / pa.abs().max(pb.abs());
+            assert!(rel < SYMMETRY_TOL, "{name}: walls {a} and {b} carry {pa} and {pb} MPa ({rel:.2e})");
+        }
+    }
+    let mx = mirror_mismatch(&sim, 0, 50.0);
+    let my = mirror_mismatch(&sim, 1, 50.0);
+    eprintln!("{name}: mirror mismatch x {mx:.2e}, y {my:.2e}");
+    assert!(mx < SYMMETRY_TOL && my < SYMMETRY_TOL, "{name}: symmetry lost: {mx:.2e} (x), {my:.2e} (y)");
+}
+
+#[test]
+fn discs_2x2_lateral() {
+    check("discs_2x2_lateral.toml", &[0, 1]);
+}
+
+#[test]
+fn discs_2x2_lateral_mu02() {
+    check("discs_2x2_lateral_mu02.toml", &[0, 1]);
+}
+
+#[test]
+fn discs_2x2_vertical() {
+    check("discs_2x2_vertical.toml", &[2, 3]);
+}
+
+#[test]
+fn discs_2x2_vertical_mu02() {
+    check("discs_2x2_vertical_mu02.toml", &[2, 3]);
+}
+
+#[test]
+fn discs_2x2_biaxial() {
+    check("discs_2x2_biaxial.toml", &[0, 1, 2, 3]);
+}
+
+#[test]
+fn discs_2x2_biaxial_mu02() {
+    check("discs_2x2_biaxial_mu02.toml", &[0, 1, 2, 3]);
+}
