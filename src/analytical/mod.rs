@@ -5,3 +5,4 @@ pub mod hill;
 pub mod creep;
 pub mod j2;
 pub mod creep_ramp;
+pub mod hertz;
