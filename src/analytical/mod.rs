@@ -6,3 +6,4 @@ pub mod creep;
 pub mod j2;
 pub mod creep_ramp;
 pub mod bar_wave;
+pub mod hertz;
