@@ -16,7 +16,7 @@
 //!    discarded and it is retried with Δt · cutback, down to `dt_min`.
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
-use crate::case::{ContactMethod, StabilisationKind, Stabilise, WallSide};
+use crate::case::{StabilisationKind, Stabilise, WallSide};
 use crate::contact::driver::{wall_position, ContactProblem, ContactStats};
 use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
 use crate::dynamics::Dynamics;
@@ -39,8 +39,6 @@ pub enum NewtonFailure {
     Element(#[from] AssemblyError),
     #[error("linear solver: {0}")]
     Linear(String),
-    #[error("the contact active set did not settle in {0} corrections")]
-    ActiveSet(usize),
 }
 
 /// A run that could not go on.
@@ -721,11 +719,8 @@ impl Simulation {
                     worst = worst.max((self.trial_fields.theta[e] - 1.0).abs());
                 }
             }
-            let wants_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats));
-            if wants_update && updates >= self.model.contact.max_augmentations && self.model.contact.method == ContactMethod::Lagrange {
-                return Err(NewtonFailure::ActiveSet(updates));
-            }
-            let contact_update = wants_update && updates < self.model.contact.max_augmentations;
+            let contact_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
+                && updates < self.model.contact.max_augmentations;
             if contact_update {
                 if let Some(c) = self.contact.as_mut() {
                     c.augment();
@@ -835,6 +830,7 @@ impl Simulation {
             }
             // line search: backtrack while the residual grows or an element fails
             let u0: Vec<f64> = u.to_vec();
+            let line_search = self.spec.line_search;
             if let Some(c) = self.contact.as_mut() {
                 c.lm.mark();
             }
@@ -853,7 +849,7 @@ impl Simulation {
                         // accept when the residual norm or the energy |Δu·R(η)| decreased
                         let s: f64 = self.du.iter().zip(&self.r).map(|(a, b)| a * b).sum::<f64>().abs();
                         let better = rn.is_finite() && (rn < r_old || s < 0.9 * energy);
-                        if !self.spec.line_search || better || eta < 0.06 {
+                        if !line_search || better || eta < 0.06 {
                             rnorm = rn;
                             accepted = rn.is_finite();
                             break;

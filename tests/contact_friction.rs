@@ -91,3 +91,4 @@ fn tied_blocks_behave_as_one_block() {
     eprintln!("tied blocks vs one block: max |du| / max |u| = {worst:.3e}");
     assert!(worst < 1e-6, "tied blocks differ from one block by {worst}");
 }
+

@@ -145,8 +145,20 @@ impl Profile {
 
 #[test]
 fn hertz_disc_on_a_rigid_flat() {
-    let start = Instant::now();
+    check_hertz(std::fs::read_to_string("jobs/verification/hertz_disc.toml").unwrap());
+}
+
+/// The same disc with Lagrange multipliers on the walls (paper eq. 22–25): zero penetration,
+/// same tolerances.
+#[test]
+fn hertz_disc_on_a_rigid_flat_lagrange_multipliers() {
     let text = std::fs::read_to_string("jobs/verification/hertz_disc.toml").unwrap();
+    assert!(text.contains("method = \"augmented_lagrangian\""));
+    check_hertz(text.replace("method = \"augmented_lagrangian\"", "method = \"lagrange\""));
+}
+
+fn check_hertz(text: String) {
+    let start = Instant::now();
     let c = case::parse(&text, std::path::Path::new("jobs/verification")).unwrap();
     let mut model = Model::from_case(&c).unwrap();
     assert_eq!(
