@@ -600,12 +600,12 @@ impl Simulation {
                 norm2 += v * v;
             }
         }
-        // Lagrange-multiplier rows: R_λ = −F_λ; c·R_λ is a force, which the norm adds
+        // Lagrange-multiplier rows (scaled to forces, see `Multipliers::rows`)
         if let Some(c) = self.contact.as_ref() {
             let n_free = self.assembler.n_free;
-            for (k, (&f, &scale)) in c.lm.rows.iter().zip(&c.lm.scale).enumerate() {
+            for (k, &f) in c.lm.rows.iter().enumerate() {
                 self.r[n_free + k] = -f;
-                norm2 += (scale * f).powi(2);
+                norm2 += f * f;
             }
         }
         Ok(norm2.sqrt())

@@ -116,10 +116,12 @@ pub enum Candidate {
 /// methods (a node takes one master segment), so rows may be nearly dependent.
 ///
 /// Known limits (measured, see the contact issue's note): exact against rigid walls (Hertz
-/// within 1.3 %), but node-to-segment multipliers do not pass the contact patch test (local
-/// σ_yy errors of ~60 % next to a non-matching interface, one- or two-pass: a mortar
-/// discretisation is needed) and the 2 × 2 aluminium job stops near solid ratio 0.75, where
-/// point contacts on the coarse plastic mesh invert elements.
+/// within 1.3 %); node-to-segment multipliers do not pass the contact patch test (local σ_yy
+/// errors of ~60 % next to a non-matching interface, one- or two-pass: a mortar discretisation
+/// is needed). Two-pass pairs over-constrain sliding between faceted particles: the 2 × 2
+/// lateral job runs to solid ratio 0.95 with `stabilise = "unsupported"` but its wall pressure
+/// at 0.94 is 5 % below the penalty one (and the run fails near 0.5 s with `stabilise = "all"`);
+/// one-pass pairs agree with the penalty within 1.5 % up to 0.85 but jam near 0.92.
 #[derive(Clone, Debug, Default)]
 pub struct Multipliers {
     pub candidates: Vec<Candidate>,
@@ -127,7 +129,10 @@ pub struct Multipliers {
     pub lambda: Vec<f64>,
     /// λ at the start of the current Newton update (the base of the line search).
     pub start: Vec<f64>,
-    /// F_λ of the last evaluation, and the scale c that turns c·F_λ into a force (N/mm).
+    /// c·F_λ of the last evaluation (a force, N/mm) and the scale c. The linear system is
+    /// written for μ = λ/c (mm) with the rows multiplied by c — a symmetric diagonal scaling
+    /// that gives the multiplier rows and columns the magnitude of the stiffness (c A) instead
+    /// of A and A/c, which keeps the pivoting LU accurate.
     pub rows: Vec<f64>,
     pub scale: Vec<f64>,
     /// Active set of the last evaluation.
@@ -156,7 +161,8 @@ impl Multipliers {
     /// λ = start + η Δλ.
     pub fn step(&mut self, delta: &[f64], eta: f64) {
         for (k, l) in self.lambda.iter_mut().enumerate() {
-            *l = self.start[k] + eta * delta[k];
+            // the system's unknown is λ/c (see `rows`)
+            *l = self.start[k] + eta * self.scale[k] * delta[k];
         }
     }
 }
@@ -438,7 +444,7 @@ impl ContactProblem {
                     let area = self.area[p.slave] * p.weight;
                     let c = self.params(body, Some(s.body)).eps_n;
                     if !g.gap.is_finite() {
-                        self.lm.rows[k] = -(area / c) * lambda;
+                        self.lm.rows[k] = -area * lambda;
                         self.lm.scale[k] = c;
                         self.trial_nts[q] = PairHistory::default();
                         continue;
@@ -474,7 +480,7 @@ impl ContactProblem {
             self.lm.scale[k] = c;
             self.lm.gap[k] = gap;
             self.lm.active[k] = active;
-            self.lm.rows[k] = if active { -area * gap } else { -(area / c) * lambda };
+            self.lm.rows[k] = if active { -c * area * gap } else { -area * lambda };
             if let Some((m, eq, n_free)) = kk.as_mut() {
                 let row = *n_free + k;
                 for (i, &d) in dofs.iter().enumerate() {
@@ -482,7 +488,7 @@ impl ContactProblem {
                     if q == FIXED {
                         continue;
                     }
-                    let v = -area * grad[i];
+                    let v = -c * area * grad[i];
                     if let Some(pos) = m.find(q, row) {
                         m.values[pos] += v;
                     }
@@ -494,7 +500,7 @@ impl ContactProblem {
                 }
                 if !active {
                     if let Some(pos) = m.find(row, row) {
-                        m.values[pos] += -area / c;
+                        m.values[pos] += -c * area;
                     }
                 }
             }
