@@ -119,9 +119,10 @@ pub enum Candidate {
 /// within 1.3 %); node-to-segment multipliers do not pass the contact patch test (local σ_yy
 /// errors of ~60 % next to a non-matching interface, one- or two-pass: a mortar discretisation
 /// is needed). Two-pass pairs over-constrain sliding between faceted particles: the 2 × 2
-/// lateral job runs to solid ratio 0.95 with `stabilise = "unsupported"` but its wall pressure
-/// at 0.94 is 5 % below the penalty one (and the run fails near 0.5 s with `stabilise = "all"`);
-/// one-pass pairs agree with the penalty within 1.5 % up to 0.85 but jam near 0.92.
+/// lateral job runs to solid ratio 0.95 only with `stabilisation_kind = "viscous"` and
+/// `stabilise = "unsupported"`, and its wall pressure at 0.94 is then 5 % below the penalty
+/// one (it fails near solid ratio 0.75 with the default inertial stabilisation); one-pass
+/// pairs agree with the penalty within 1.5 % up to 0.85 but jam near 0.92.
 #[derive(Clone, Debug, Default)]
 pub struct Multipliers {
     pub candidates: Vec<Candidate>,
