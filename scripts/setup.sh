@@ -7,6 +7,12 @@ need=()
 command -v cc >/dev/null 2>&1 || need+=(gcc libc6-dev)
 command -v pkg-config >/dev/null 2>&1 || need+=(pkg-config)
 command -v make >/dev/null 2>&1 || need+=(make)
+# HDF5 C library and headers for the hdf5-metno crate (results.h5)
+dpkg -s libhdf5-dev >/dev/null 2>&1 || need+=(libhdf5-dev)
+# ParaView's Python, headless, for tests/paraview.rs (opens results.xdmf like a user would)
+command -v pvpython >/dev/null 2>&1 || need+=(paraview python3-paraview)
+command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb)
+command -v xauth >/dev/null 2>&1 || need+=(xauth)
 
 if ((${#need[@]})); then
   echo "setup: installing ${need[*]}"

@@ -492,13 +492,23 @@ impl Default for SolverSpec {
     }
 }
 
-/// Extra columns of `history.csv`: `(body index, edge set name)`.
-#[derive(Debug, Clone, PartialEq, Default)]
+/// Extra columns of `history.csv`: `(body index, edge set name)`, and how often the field
+/// results (`results.h5` / `results.xdmf`) are written.
+#[derive(Debug, Clone, PartialEq)]
 pub struct OutputSpec {
     /// Reaction force columns `rx_BODY_SET`, `ry_BODY_SET`.
     pub reactions: Vec<(usize, String)>,
     /// Mean displacement columns `ux_BODY_SET`, `uy_BODY_SET`.
     pub displacements: Vec<(usize, String)>,
+    /// Write the field results every `every` converged steps (and always the last one);
+    /// 0 writes no field results. Default 1.
+    pub every: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { reactions: Vec::new(), displacements: Vec::new(), every: 1 }
+    }
 }
 
 impl Case {
@@ -854,6 +864,7 @@ mod raw {
     pub struct Output {
         pub reactions: Option<Vec<String>>,
         pub displacements: Option<Vec<String>>,
+        pub every: Option<i64>,
     }
 }
 
@@ -2404,6 +2415,9 @@ impl Cx<'_> {
             r.displacements.unwrap_or_default(),
             bodies,
         )?;
+        if let Some(v) = r.every {
+            out.every = self.count("output.every", v, 0)?;
+        }
         Ok(out)
     }
 

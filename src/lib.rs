@@ -30,6 +30,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod results;
 pub mod packing;
 pub mod solver;
 pub mod verify;

@@ -13,6 +13,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mpfem::case::{self, Case};
 use mpfem::model::Model;
 use mpfem::output::{write_summary, HistoryWriter, SummaryFile};
+use mpfem::results::ResultsWriter;
 use mpfem::solver::Simulation;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -35,7 +36,7 @@ enum Command {
     Run {
         /// The TOML case file; omit to run the built-in default job (jobs/default.toml).
         case: Option<PathBuf>,
-        /// Output directory for history.csv and summary.json.
+        /// Output directory for history.csv, summary.json, results.h5 and results.xdmf.
         #[arg(short, long, default_value = "out")]
         out: PathBuf,
         /// Threads for assembly and factorisation (overrides [solver] threads; 0 = all cores).
@@ -162,6 +163,10 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
         }
     };
     let mut history = HistoryWriter::create(out, &model).with_context(|| format!("cannot write {}/history.csv", out.display()))?;
+    let mut results = match c.output.every {
+        0 => None,
+        every => Some(ResultsWriter::create(out, every).with_context(|| format!("cannot write the results in {}", out.display()))?),
+    };
     let formulation = format!("{:?}", c.formulation);
     let n_nodes = model.n_nodes();
     let n_elements = model.elements.len();
@@ -189,9 +194,17 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
     let tty = std::io::stderr().is_terminal();
     let mut next_note = 0.1;
     let mut io_error: Option<std::io::Error> = None;
-    let result = sim.run(&mut |_, r| {
+    let mut results_error: Option<mpfem::results::ResultsError> = None;
+    let mut last_report: Option<mpfem::solver::StepReport> = None;
+    let result = sim.run(&mut |s, r| {
+        last_report = Some(r.clone());
         if let Err(e) = history.write(r) {
             io_error.get_or_insert(e);
+        }
+        if let (Some(w), None) = (results.as_mut(), &results_error) {
+            if let Err(e) = w.observe(s, r) {
+                results_error = Some(e);
+            }
         }
         bar.set_position((1000.0 * r.time / t_end) as u64);
         bar.set_message(format!("{:.4e} s, step {}, dt {:.2e}, {} it", r.time, r.step, r.dt, r.newton_iterations));
@@ -203,6 +216,15 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
     bar.finish_and_clear();
     if let Some(e) = io_error {
         eprintln!("warning: history.csv: {e}");
+    }
+    // the last converged step is always in the results, also when the run failed after it
+    if let (Some(w), None) = (results.as_mut(), &results_error) {
+        if let Err(e) = w.finish(&sim, last_report.as_ref()) {
+            results_error = Some(e);
+        }
+    }
+    if let Some(e) = &results_error {
+        eprintln!("warning: results: {e}; the steps written before are readable");
     }
     let (status, error, summary) = match &result {
         Ok(s) => ("completed", None, Some(s)),
@@ -235,12 +257,32 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
                 s.wall_time_s,
                 s.last.as_ref().map_or(0.0, |r| r.volume_error)
             );
-            eprintln!("mpfem: wrote {} and {}", history.path.display(), summary_path.display());
+            match &results {
+                Some(w) => eprintln!(
+                    "mpfem: wrote {}, {}, {} ({} output steps, {:.2} s) and {}",
+                    history.path.display(),
+                    summary_path.display(),
+                    w.h5_path.display(),
+                    w.n_written(),
+                    w.elapsed_s,
+                    w.xdmf_path.display()
+                ),
+                None => eprintln!("mpfem: wrote {} and {}", history.path.display(), summary_path.display()),
+            }
             Ok(ExitCode::SUCCESS)
         }
         Err(e) => {
             eprintln!("error: the run stopped at t = {} s: {e}", sim.sol.time);
-            eprintln!("mpfem: results up to the last converged step are in {} and {}", history.path.display(), summary_path.display());
+            match &results {
+                Some(w) => eprintln!(
+                    "mpfem: results up to the last converged step are in {}, {}, {} and {}",
+                    history.path.display(),
+                    summary_path.display(),
+                    w.h5_path.display(),
+                    w.xdmf_path.display()
+                ),
+                None => eprintln!("mpfem: results up to the last converged step are in {} and {}", history.path.display(), summary_path.display()),
+            }
             Ok(ExitCode::from(1))
         }
     }

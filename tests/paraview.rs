@@ -1,0 +1,123 @@
+//! ParaView opens the results: `pvpython` (Debian's `paraview` package, headless under
+//! `xvfb-run`) opens `./results.xdmf` of a small compaction run, checks the time steps against
+//! `history.csv` and the field names, colours by von Mises stress at the last step and saves a
+//! PNG. Skipped (with a message) only when `pvpython` is not installed and `CI` is not set;
+//! under CI a missing `pvpython` fails the test.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const CASE: &str = include_str!("data/discs_coarse.toml");
+
+const SCRIPT: &str = r#"
+import os, sys
+from paraview.simple import *
+expected = [float(t) for t in sys.argv[1].split(",")]
+r = OpenDataFile("./results.xdmf")
+if r is None:
+    sys.exit("pvpython: cannot open ./results.xdmf")
+r.UpdatePipelineInformation()
+times = list(r.TimestepValues)
+if len(times) != len(expected) or any(abs(a - b) > 1e-9 * max(1.0, abs(b)) for a, b in zip(times, expected)):
+    sys.exit("pvpython: time steps %r, expected %r" % (times, expected))
+r.UpdatePipeline(times[-1])
+cells = set(r.CellData.keys())
+points = set(r.PointData.keys())
+need = {"stress_xx", "stress_yy", "stress_xy", "stress_zz", "von_mises", "pressure",
+        "eq_plastic_strain", "eq_creep_strain", "particle_id", "material_id"}
+if not need <= cells or "displacement" not in points:
+    sys.exit("pvpython: missing arrays: cells %r, displacement %r" % (sorted(need - cells), "displacement" in points))
+lo, hi = r.CellData["von_mises"].GetRange()
+if not (0.0 <= lo < hi):
+    sys.exit("pvpython: von_mises range %r at the last step" % ((lo, hi),))
+view = GetActiveViewOrCreate("RenderView")
+scene = GetAnimationScene()
+scene.UpdateAnimationUsingDataTimeSteps()
+scene.AnimationTime = times[-1]
+d = Show(r, view)
+ColorBy(d, ("CELLS", "von_mises"))
+d.RescaleTransferFunctionToDataRange(False, True)
+d.SetScalarBarVisibility(view, True)
+view.InteractionMode = "2D"
+ResetCamera(view)
+SaveScreenshot("./von_mises.png", view, ImageResolution=[800, 600])
+if not os.path.exists("./von_mises.png") or os.path.getsize("./von_mises.png") == 0:
+    sys.exit("pvpython: no PNG written")
+print("pvpython: %d time steps, von_mises %.6g..%.6g MPa, von_mises.png written" % (len(times), lo, hi))
+"#;
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mpfem-paraview-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|p| p.join(program).is_file()))
+}
+
+/// Times of the history rows that are output steps (every 2 steps and the last one).
+fn output_times(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let s = header.iter().position(|c| *c == "step").unwrap();
+    let t = header.iter().position(|c| *c == "time").unwrap();
+    let rows: Vec<(usize, String)> = lines
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            (v[s].parse().unwrap(), v[t].to_string())
+        })
+        .collect();
+    let last = rows.last().map(|r| r.0);
+    rows.into_iter()
+        .filter(|(s, _)| s % 2 == 0 || Some(*s) == last)
+        .map(|(_, t)| t)
+        .collect()
+}
+
+#[test]
+fn paraview_opens_results_xdmf() {
+    let ci = std::env::var_os("CI").is_some_and(|v| !v.is_empty());
+    if !on_path("pvpython") || !on_path("xvfb-run") {
+        assert!(!ci, "CI is set but pvpython or xvfb-run is missing: run scripts/setup.sh (it installs paraview, python3-paraview, xvfb, xauth)");
+        eprintln!("SKIPPED paraview_opens_results_xdmf: pvpython or xvfb-run not installed (scripts/setup.sh installs them)");
+        return;
+    }
+    let dir = tmpdir("run");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, CASE).unwrap();
+    let out = dir.join("out");
+    let st = Command::new(env!("CARGO_BIN_EXE_mpfem"))
+        .args(["run", "--quiet", "--out"])
+        .arg(&out)
+        .arg(&case)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let times = output_times(&out);
+    assert!(times.len() >= 2);
+    std::fs::write(out.join("check_results.py"), SCRIPT).unwrap();
+    let o = Command::new("xvfb-run")
+        .args(["-a", "pvpython", "check_results.py"])
+        .arg(times.join(","))
+        .current_dir(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success(),
+        "pvpython failed ({}):\n{stdout}\n{stderr}",
+        o.status
+    );
+    assert!(
+        stdout.contains("von_mises.png written"),
+        "{stdout}\n{stderr}"
+    );
+    let png = std::fs::read(out.join("von_mises.png")).unwrap();
+    assert!(png.len() > 1000 && png.starts_with(b"\x89PNG"), "not a PNG");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,251 @@
+//! `mpfem run` writes `results.h5` and `results.xdmf`: a small compaction run (2 x 2 discs,
+//! coarse mesh, stopped at solid ratio 0.74, output every 2 steps) is read back with the hdf5
+//! crate; the shapes, the output steps and their times agree with `history.csv`, the last step
+//! is always written, and the XDMF file is well formed with one grid per output step.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("mpfem-results-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const CASE: &str = include_str!("data/discs_coarse.toml");
+
+/// (step, time) of every row of history.csv.
+fn history(dir: &Path) -> Vec<(usize, f64)> {
+    let text = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let s = header.iter().position(|c| *c == "step").unwrap();
+    let t = header.iter().position(|c| *c == "time").unwrap();
+    lines
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            (v[s].parse().unwrap(), v[t].parse().unwrap())
+        })
+        .collect()
+}
+
+/// Check that the tags of an XML text nest properly; returns the tag names in order.
+fn xml_tags(text: &str) -> Vec<String> {
+    let mut stack: Vec<String> = Vec::new();
+    let mut names = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find('<') {
+        let j = rest[i..].find('>').expect("unterminated tag") + i;
+        let tag = &rest[i + 1..j];
+        rest = &rest[j + 1..];
+        if tag.starts_with('?') || tag.starts_with('!') {
+            continue;
+        }
+        if let Some(name) = tag.strip_prefix('/') {
+            let open = stack.pop().expect("closing tag without an opening one");
+            assert_eq!(open, name.trim(), "mismatched closing tag");
+            continue;
+        }
+        let name = tag
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .trim_end_matches('/')
+            .to_string();
+        names.push(name.clone());
+        if !tag.ends_with('/') {
+            stack.push(name);
+        }
+    }
+    assert!(stack.is_empty(), "unclosed tags {stack:?}");
+    names
+}
+
+#[test]
+fn run_writes_results_h5_and_xdmf_matching_the_history() {
+    let dir = tmpdir("coarse");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, CASE).unwrap();
+    let out = dir.join("out");
+    let st = Command::new(env!("CARGO_BIN_EXE_mpfem"))
+        .args(["run", "--quiet", "--out"])
+        .arg(&out)
+        .arg(&case)
+        .status()
+        .unwrap();
+    assert!(st.success());
+
+    let hist = history(&out);
+    assert!(
+        hist.len() >= 3,
+        "too few steps for the test: {}",
+        hist.len()
+    );
+    let last = *hist.last().unwrap();
+    let expected: Vec<(usize, f64)> = hist
+        .iter()
+        .copied()
+        .filter(|(s, _)| s % 2 == 0 || *s == last.0)
+        .collect();
+
+    let file = hdf5::File::open(out.join("results.h5")).unwrap();
+    let steps = file.group("steps").unwrap();
+    let mut names = steps.member_names().unwrap();
+    names.sort();
+    assert_eq!(
+        names.len(),
+        expected.len(),
+        "output steps {names:?} vs history {expected:?}"
+    );
+    let mut n_nodes = 0;
+    for (name, (step, time)) in names.iter().zip(&expected) {
+        assert_eq!(name, &format!("{step:06}"));
+        let g = steps.group(name).unwrap();
+        let t: f64 = g.attr("time").unwrap().read_scalar().unwrap();
+        assert!(
+            (t - time).abs() <= 1e-9 * time.abs().max(1.0),
+            "step {step}: time {t} vs {time}"
+        );
+        let s: u64 = g.attr("step").unwrap().read_scalar().unwrap();
+        assert_eq!(s as usize, *step);
+
+        let x = g.dataset("coordinates").unwrap();
+        let cells = g.dataset("cells").unwrap();
+        let nn = x.shape()[0];
+        let ne = cells.shape()[0];
+        assert_eq!(x.shape(), vec![nn, 2]);
+        assert_eq!(cells.shape(), vec![ne, 4]);
+        assert!(ne > 0 && nn > ne);
+        n_nodes = nn;
+        let c: Vec<i64> = cells.read_raw().unwrap();
+        assert!(
+            c.iter().all(|&n| n >= 0 && (n as usize) < nn),
+            "cells are 0-based node numbers"
+        );
+        assert_eq!(g.dataset("displacement").unwrap().shape(), vec![nn, 3]);
+        let pid: Vec<i32> = g.dataset("particle_id").unwrap().read_raw().unwrap();
+        assert_eq!(pid.len(), ne);
+        assert_eq!(pid.iter().copied().max(), Some(3), "four particles");
+        assert_eq!(g.dataset("material_id").unwrap().shape(), vec![ne]);
+        for f in mpfem::results::CELL_FIELDS {
+            let v: Vec<f64> = g.dataset(f).unwrap().read_raw().unwrap();
+            assert_eq!(v.len(), ne, "{f}");
+            assert!(v.iter().all(|x| x.is_finite()), "{f}");
+        }
+        let vm: Vec<f64> = g.dataset("von_mises").unwrap().read_raw().unwrap();
+        assert!(vm.iter().all(|&v| v >= 0.0));
+        assert_eq!(g.dataset("wall_points").unwrap().shape(), vec![8, 2]);
+        assert_eq!(g.dataset("wall_cells").unwrap().shape(), vec![4, 2]);
+    }
+    // the discs are compressed laterally: some plastic strain and stress at the last step
+    let g = steps.group(names.last().unwrap()).unwrap();
+    let vm: Vec<f64> = g.dataset("von_mises").unwrap().read_raw().unwrap();
+    assert!(vm.iter().any(|&v| v > 1.0), "stress at the last step");
+    // left wall at x = 10 t
+    let wp: Vec<f64> = g.dataset("wall_points").unwrap().read_raw().unwrap();
+    assert!(
+        (wp[0] - 10.0 * last.1).abs() < 1e-9,
+        "left wall at {} vs {}",
+        wp[0],
+        10.0 * last.1
+    );
+    // coordinates = reference + displacement: displacement of the first step is small but not 0
+    let u: Vec<f64> = g.dataset("displacement").unwrap().read_raw().unwrap();
+    assert_eq!(u.len(), 3 * n_nodes);
+    assert!(u.iter().skip(2).step_by(3).all(|&z| z == 0.0));
+
+    let xdmf = std::fs::read_to_string(out.join("results.xdmf")).unwrap();
+    let tags = xml_tags(&xdmf);
+    assert_eq!(tags[0], "Xdmf");
+    assert!(xdmf.contains("GridType=\"Collection\" CollectionType=\"Temporal\""));
+    let times: Vec<f64> = xdmf
+        .split("<Grid Name=\"step_")
+        .skip(1)
+        .map(|b| {
+            let v = b.split("<Time Value=\"").nth(1).unwrap();
+            v[..v.find('"').unwrap()].parse().unwrap()
+        })
+        .collect();
+    assert_eq!(times.len(), expected.len());
+    for (t, (_, h)) in times.iter().zip(&expected) {
+        assert!((t - h).abs() <= 1e-9 * h.abs().max(1.0));
+    }
+    assert!(!out.join("results.xdmf.tmp").exists());
+    let walls = std::fs::read_to_string(out.join("walls.xdmf")).unwrap();
+    xml_tags(&walls);
+    assert_eq!(walls.matches("<Grid Name=\"walls_").count(), expected.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn output_every_zero_writes_no_results_and_negative_is_an_error() {
+    let dir = tmpdir("every");
+    let case = dir.join("case.toml");
+    let bad = CASE.replace("every = 2", "every = -1");
+    std::fs::write(&case, bad).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_mpfem"))
+        .args(["check"])
+        .arg(&case)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("output.every"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A run killed with SIGKILL while it writes leaves a `results.h5` that opens and holds every
+/// step that `results.xdmf` named at the moment of the kill.
+#[test]
+fn killed_run_leaves_a_readable_results_file() {
+    let dir = tmpdir("kill");
+    let case = dir.join("case.toml");
+    let long = CASE
+        .replace("every = 2", "every = 1")
+        .replace("solid_ratio = 0.74", "solid_ratio = 0.9")
+        .replace("dt_max = 0.1", "dt_max = 0.01")
+        .replace("dt = 0.05", "dt = 0.01");
+    std::fs::write(&case, long).unwrap();
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mpfem"))
+        .args(["run", "--quiet", "--out"])
+        .arg(&out)
+        .arg(&case)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let xdmf = out.join("results.xdmf");
+    let started = std::time::Instant::now();
+    let count = |p: &Path| {
+        std::fs::read_to_string(p).map_or(0, |t| t.matches("<Grid Name=\"step_").count())
+    };
+    while count(&xdmf) < 3 {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it could be killed"
+        );
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "no output steps after 60 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let text = std::fs::read_to_string(&xdmf).unwrap();
+    xml_tags(&text);
+    let named = text.matches("<Grid Name=\"step_").count();
+    assert!(named >= 3);
+    let file = hdf5::File::open(out.join("results.h5")).unwrap();
+    let steps = file.group("steps").unwrap();
+    for block in text.split("<Grid Name=\"step_").skip(1) {
+        let name = &block[..6];
+        let g = steps.group(name).unwrap();
+        let x: Vec<f64> = g.dataset("coordinates").unwrap().read_raw().unwrap();
+        let vm: Vec<f64> = g.dataset("von_mises").unwrap().read_raw().unwrap();
+        assert!(!x.is_empty() && !vm.is_empty());
+        let _: f64 = g.attr("time").unwrap().read_scalar().unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
