@@ -136,24 +136,12 @@ pub struct Multipliers {
     /// of A and A/c, which keeps the pivoting LU accurate.
     pub rows: Vec<f64>,
     pub scale: Vec<f64>,
-    /// Active set of the last evaluation.
-    pub active: Vec<bool>,
-    /// Gap of every candidate at the last evaluation (mm).
-    pub gap: Vec<f64>,
     /// Committed multipliers by candidate key, to start the next step from.
     committed: HashMap<(u8, usize, usize), f64>,
     keys: Vec<(u8, usize, usize)>,
 }
 
 impl Multipliers {
-    pub fn len(&self) -> usize {
-        self.candidates.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.candidates.is_empty()
-    }
-
     /// Remember the current iterate as the base of a Newton update.
     pub fn mark(&mut self) {
         self.start.clone_from(&self.lambda);
@@ -394,10 +382,8 @@ impl ContactProblem {
         let keys: Vec<_> = cands.iter().map(|&c| self.lm_key(c)).collect();
         let changed = keys != self.lm.keys;
         self.lm.lambda = keys.iter().map(|k| self.lm.committed.get(k).copied().unwrap_or(0.0)).collect();
-        self.lm.active = self.lm.lambda.iter().map(|&l| l > 0.0).collect();
         self.lm.start.clone_from(&self.lm.lambda);
         self.lm.rows = vec![0.0; cands.len()];
-        self.lm.gap = vec![0.0; cands.len()];
         self.lm.scale = vec![0.0; cands.len()];
         self.lm.candidates = cands;
         self.lm.keys = keys;
@@ -479,8 +465,6 @@ impl ContactProblem {
             }
             let active = lambda - c * gap > 0.0;
             self.lm.scale[k] = c;
-            self.lm.gap[k] = gap;
-            self.lm.active[k] = active;
             self.lm.rows[k] = if active { -c * area * gap } else { -area * lambda };
             if let Some((m, eq, n_free)) = kk.as_mut() {
                 let row = *n_free + k;
