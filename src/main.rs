@@ -165,7 +165,7 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
     let mut history = HistoryWriter::create(out, &model).with_context(|| format!("cannot write {}/history.csv", out.display()))?;
     let mut results = match c.output.every {
         0 => None,
-        every => Some(ResultsWriter::create(out, every).with_context(|| format!("cannot write the results in {}", out.display()))?),
+        every => Some(ResultsWriter::create(out, every, &mpfem::output::history_columns(&model)).with_context(|| format!("cannot write the results in {}", out.display()))?),
     };
     let formulation = format!("{:?}", c.formulation);
     let n_nodes = model.n_nodes();

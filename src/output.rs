@@ -82,38 +82,53 @@ impl HistoryWriter {
     }
 
     pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
-        write!(
-            self.out,
-            "{},{:.9e},{:.6e},{},{},{},{:.3e},{:.6e},{:.6e},{:.6e},{:.9e}",
-            r.step,
-            r.time,
-            r.dt,
-            r.newton_iterations,
-            r.volume_updates,
-            r.cutbacks,
-            r.residual,
-            r.volume_error,
-            r.volume_error_max_body,
-            r.max_element_volume_change,
-            r.kinetic_energy
-        )?;
-        if let Some(c) = &r.compaction {
-            write!(self.out, ",{:.9e}", c.solid_ratio)?;
-            for v in c.pressure.iter().chain(&c.force) {
-                write!(self.out, ",{v:.9e}")?;
+        let values = history_values(r);
+        for (i, v) in values.iter().enumerate() {
+            if i > 0 {
+                write!(self.out, ",")?;
             }
-            write!(
-                self.out,
-                ",{:.6e},{},{:.9e},{:.9e}",
-                c.max_penetration, c.active_contacts, c.stabilisation_energy, c.external_work
-            )?;
-        }
-        for v in r.reactions.iter().chain(&r.displacements) {
-            write!(self.out, ",{:.9e},{:.9e}", v[0], v[1])?;
+            if INTEGER_COLUMNS.contains(&i) || (r.compaction.is_some() && i == ACTIVE_CONTACTS_COLUMN) {
+                write!(self.out, "{v}")?;
+            } else {
+                write!(self.out, "{v:.9e}")?;
+            }
         }
         writeln!(self.out)?;
         self.out.flush()
     }
+}
+
+/// Positions of the integer columns of [`history_columns`]: step, newton_iterations,
+/// volume_updates, cutbacks ...
+const INTEGER_COLUMNS: [usize; 4] = [0, 3, 4, 5];
+/// ... and active_contacts when the compaction columns are present (11 general columns, then
+/// the 13 compaction ones, of which it is the 11th).
+const ACTIVE_CONTACTS_COLUMN: usize = 11 + 10;
+
+/// One row of the history, in the order of [`history_columns`] (integers as exact f64).
+pub fn history_values(r: &StepReport) -> Vec<f64> {
+    let mut v = vec![
+        r.step as f64,
+        r.time,
+        r.dt,
+        r.newton_iterations as f64,
+        r.volume_updates as f64,
+        r.cutbacks as f64,
+        r.residual,
+        r.volume_error,
+        r.volume_error_max_body,
+        r.max_element_volume_change,
+        r.kinetic_energy,
+    ];
+    if let Some(c) = &r.compaction {
+        v.push(c.solid_ratio);
+        v.extend(c.pressure.iter().chain(&c.force));
+        v.extend([c.max_penetration, c.active_contacts as f64, c.stabilisation_energy, c.external_work]);
+    }
+    for x in r.reactions.iter().chain(&r.displacements) {
+        v.extend(x);
+    }
+    v
 }
 
 /// Contents of `summary.json`.

@@ -13,10 +13,23 @@
 //!   `stress_xx`, `stress_yy`, `stress_xy`, `stress_zz` (Cauchy, MPa), `von_mises` (MPa),
 //!   `pressure` = −tr σ / 3 (MPa), `eq_plastic_strain` and `eq_creep_strain` (the equivalent
 //!   strains of the material state, 0 for a law without them);
+//! - `velocity` (n_nodes × 3, f64, mm/s): the Newmark velocity in a dynamic run, otherwise the
+//!   mean velocity of the step (u_n − u_{n−1})/Δt;
+//! - when the model has contact (walls or several particles), node fields from the last
+//!   converged contact evaluation: `contact_pressure` (n_nodes, MPa, ≥ 0 in compression; the
+//!   node's own pairs, two-pass), `contact_gap` (n_nodes, mm, smallest normal gap to a
+//!   candidate segment or wall, negative = penetration, NaN for a node without one),
+//!   `contact_status` (n_nodes, i32: 0 open, 1 sliding, 2 sticking, 3 tied), `contact_force`
+//!   (n_nodes × 3, N/mm: the force the contacts exert on the node) and `wall_force`
+//!   (n_nodes × 4, N/mm: the normal force the node exerts on the left, right, bottom and top
+//!   wall; its column sums are `f_left` … `f_top` of the history);
 //! - when the model has walls: `wall_points` (2 n_walls × 2, f64, mm) and `wall_cells`
 //!   (n_walls × 2, i64): each wall as a line segment at its current position, spanning the
 //!   two walls across it (or the particles' extent when one of those is missing), and
 //!   `wall_id` (n_walls, i32: 0 left, 1 right, 2 bottom, 3 top).
+//!
+//! `/history` (n_rows × n_columns, f64, chunked, grows by one row per converged step) holds the
+//! history table of `history.csv`, its column names in the attribute `columns`.
 //!
 //! `results.xdmf` describes the particles; `walls.xdmf` (written when the model has walls)
 //! describes the walls over the same steps; open both in ParaView.
@@ -81,6 +94,9 @@ pub struct ResultsWriter {
     /// partial arrays of a multi-block data set in ParaView).
     pub walls_xdmf_path: PathBuf,
     every: usize,
+    /// Number of history columns and rows written.
+    history_columns: usize,
+    history_rows: usize,
     steps: Vec<WrittenStep>,
     /// Wall-clock time spent writing the results so far (s).
     pub elapsed_s: f64,
@@ -95,8 +111,9 @@ pub fn von_mises(s: &[f64; 4]) -> f64 {
 
 impl ResultsWriter {
     /// Create (truncate) `DIR/results.h5` and write an empty `DIR/results.xdmf`. `every` is the
-    /// output frequency in converged steps (must be ≥ 1).
-    pub fn create(dir: &Path, every: usize) -> Result<Self, ResultsError> {
+    /// output frequency in converged steps (must be ≥ 1); `columns` are the names of the
+    /// history columns ([`crate::output::history_columns`]).
+    pub fn create(dir: &Path, every: usize, columns: &[String]) -> Result<Self, ResultsError> {
         let h5_path = dir.join("results.h5");
         let xdmf_path = dir.join("results.xdmf");
         let walls_xdmf_path = dir.join("walls.xdmf");
@@ -111,12 +128,27 @@ impl ResultsWriter {
             xdmf_path,
             walls_xdmf_path,
             every: every.max(1),
+            history_columns: columns.len(),
+            history_rows: 0,
             elapsed_s: 0.0,
             steps: Vec::new(),
             last_step: None,
         };
+        let names: Vec<hdf5::types::VarLenUnicode> = columns
+            .iter()
+            .map(|c| c.parse().unwrap_or_default())
+            .collect();
         w.h5(|f| {
             f.create_group("steps")?;
+            let h = f
+                .new_dataset::<f64>()
+                .chunk((64, columns.len().max(1)))
+                .shape((0.., columns.len()))
+                .create("history")?;
+            h.new_attr::<hdf5::types::VarLenUnicode>()
+                .shape(names.len())
+                .create("columns")?
+                .write_raw(&names)?;
             f.flush()
         })?;
         w.write_xdmf()?;
@@ -138,11 +170,36 @@ impl ResultsWriter {
     /// Write the step of `report` when its number is a multiple of the output frequency.
     /// Returns whether it was written.
     pub fn observe(&mut self, sim: &Simulation, report: &StepReport) -> Result<bool, ResultsError> {
+        self.append_history(report)?;
         if report.step % self.every == 0 {
             self.write_step(sim, report.step, report.time)?;
             return Ok(true);
         }
         Ok(false)
+    }
+
+    /// Append the history row of `report` to `/history` (flushed at the next output step, or
+    /// at once when output steps are rare).
+    fn append_history(&mut self, report: &StepReport) -> Result<(), ResultsError> {
+        let row = crate::output::history_values(report);
+        let (n, m) = (self.history_rows, self.history_columns);
+        if row.len() != m {
+            // cannot happen for the model the columns came from; keep the file consistent
+            tracing::warn!(got = row.len(), expected = m, "history row of the wrong length not written to results.h5");
+            return Ok(());
+        }
+        let flush = report.step % self.every != 0 && self.every > 1;
+        self.h5(|f| {
+            let h = f.dataset("history")?;
+            h.resize((n + 1, m))?;
+            h.write_slice(&row[..], (n, ..))?;
+            if flush {
+                f.flush()?;
+            }
+            Ok(())
+        })?;
+        self.history_rows += 1;
+        Ok(())
     }
 
     /// Write the current state of `sim` (the end of the last converged step) unless that step
@@ -182,6 +239,21 @@ impl ResultsWriter {
             .iter()
             .flat_map(|e| e.map(|n| n as i64))
             .collect();
+        let vel = sim.velocity();
+        let velocity: Vec<f64> = (0..n_nodes)
+            .flat_map(|n| [vel[2 * n], vel[2 * n + 1], 0.0])
+            .collect();
+        let contact = sim.nodal_contact().filter(|c| c.pressure.len() == n_nodes).map(|c| {
+            let mut wall_force = vec![0.0; 4 * n_nodes];
+            for (w, f) in model.walls.iter().zip(&c.wall_force) {
+                let side = side_index(w.side);
+                for (n, v) in f.iter().enumerate() {
+                    wall_force[4 * n + side] += v;
+                }
+            }
+            let force: Vec<f64> = c.force.iter().flat_map(|f| [f[0], f[1], 0.0]).collect();
+            (c, force, wall_force)
+        });
         let particle: Vec<i32> = model.elem_body.iter().map(|&b| b as i32).collect();
         let material: Vec<i32> = model.elem_material.iter().map(|&m| m as i32).collect();
 
@@ -254,12 +326,7 @@ impl ResultsWriter {
                     wall_points.extend([lo, p, hi, p]);
                 }
             }
-            wall_ids.push(match w.side {
-                WallSide::Left => 0i32,
-                WallSide::Right => 1,
-                WallSide::Bottom => 2,
-                WallSide::Top => 3,
-            });
+            wall_ids.push(side_index(w.side) as i32);
         }
         let wall_cells: Vec<i64> = (0..2 * walls.len() as i64).collect();
 
@@ -290,6 +357,27 @@ impl ResultsWriter {
                 .shape((n_nodes, 3))
                 .create("displacement")?
                 .write_raw(&disp)?;
+            g.new_dataset::<f64>()
+                .shape((n_nodes, 3))
+                .create("velocity")?
+                .write_raw(&velocity)?;
+            if let Some((c, force, wall_force)) = &contact {
+                for (name, v) in [("contact_pressure", &c.pressure), ("contact_gap", &c.gap)] {
+                    g.new_dataset::<f64>().shape(n_nodes).create(name)?.write_raw(v)?;
+                }
+                g.new_dataset::<i32>()
+                    .shape(n_nodes)
+                    .create("contact_status")?
+                    .write_raw(&c.status)?;
+                g.new_dataset::<f64>()
+                    .shape((n_nodes, 3))
+                    .create("contact_force")?
+                    .write_raw(force)?;
+                g.new_dataset::<f64>()
+                    .shape((n_nodes, 4))
+                    .create("wall_force")?
+                    .write_raw(wall_force)?;
+            }
             for (name, v) in CELL_FIELDS.iter().zip(&cell) {
                 g.new_dataset::<f64>()
                     .shape(n_cells)
@@ -318,7 +406,7 @@ impl ResultsWriter {
             .map_or_else(|| "results.h5".into(), |s| s.to_string_lossy().into_owned());
         let g = format!("/{group}");
         self.steps.push(WrittenStep {
-            grid: particle_grid(&h5, &g, time, n_nodes, n_cells),
+            grid: particle_grid(&h5, &g, time, n_nodes, n_cells, contact.is_some()),
             walls: (!walls.is_empty()).then(|| wall_grid(&h5, &g, time, walls.len())),
         });
         self.last_step = Some(step);
@@ -392,8 +480,19 @@ fn item(h5: &str, dims: String, ty: &str, prec: u8, path: &str) -> String {
     format!("<DataItem Dimensions=\"{dims}\" NumberType=\"{ty}\" Precision=\"{prec}\" Format=\"HDF\">{h5}:{path}</DataItem>")
 }
 
-/// The XDMF grid of the particles at one output step (HDF5 group `g`).
-fn particle_grid(h5: &str, g: &str, time: f64, n_nodes: usize, n_cells: usize) -> String {
+/// Index of a wall side in the `wall_force` columns and `wall_id`: left, right, bottom, top.
+fn side_index(side: WallSide) -> usize {
+    match side {
+        WallSide::Left => 0,
+        WallSide::Right => 1,
+        WallSide::Bottom => 2,
+        WallSide::Top => 3,
+    }
+}
+
+/// The XDMF grid of the particles at one output step (HDF5 group `g`), with the contact node
+/// fields when `contact`.
+fn particle_grid(h5: &str, g: &str, time: f64, n_nodes: usize, n_cells: usize, contact: bool) -> String {
     let name = g.rsplit('/').next().unwrap_or("step");
     let mut s = String::new();
     let _ = writeln!(s, "      <Grid Name=\"step_{name}\" GridType=\"Uniform\">");
@@ -414,11 +513,23 @@ fn particle_grid(h5: &str, g: &str, time: f64, n_nodes: usize, n_cells: usize) -
             &format!("{g}/coordinates")
         )
     );
-    let _ = writeln!(
-        s,
-        "        <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">{}</Attribute>",
-        item(h5, format!("{n_nodes} 3"), "Float", 8, &format!("{g}/displacement"))
-    );
+    let vectors: &[&str] = if contact { &["displacement", "velocity", "contact_force"] } else { &["displacement", "velocity"] };
+    for name in vectors {
+        let _ = writeln!(
+            s,
+            "        <Attribute Name=\"{name}\" AttributeType=\"Vector\" Center=\"Node\">{}</Attribute>",
+            item(h5, format!("{n_nodes} 3"), "Float", 8, &format!("{g}/{name}"))
+        );
+    }
+    if contact {
+        for (name, ty, prec) in [("contact_pressure", "Float", 8), ("contact_gap", "Float", 8), ("contact_status", "Int", 4)] {
+            let _ = writeln!(
+                s,
+                "        <Attribute Name=\"{name}\" AttributeType=\"Scalar\" Center=\"Node\">{}</Attribute>",
+                item(h5, n_nodes.to_string(), ty, prec, &format!("{g}/{name}"))
+            );
+        }
+    }
     for name in ["particle_id", "material_id"] {
         let _ = writeln!(
             s,

@@ -366,6 +366,24 @@ impl Simulation {
         &self.linear_name
     }
 
+    /// Nodal velocities of the last committed step (mm/s, dof `2 n + c`): the Newmark
+    /// velocity with inertia, otherwise the step's mean velocity (u_n − u_{n−1})/Δt (zero
+    /// before the first step).
+    pub fn velocity(&self) -> Vec<f64> {
+        if let Some(dy) = self.dynamics.as_ref() {
+            return dy.v.clone();
+        }
+        if self.step == 0 || !(self.dt_prev > 0.0) {
+            return vec![0.0; self.sol.u.len()];
+        }
+        self.sol.u.iter().zip(&self.u_prev).map(|(a, b)| (a - b) / self.dt_prev).collect()
+    }
+
+    /// Contact state per node of the last committed step (None without contact).
+    pub fn nodal_contact(&self) -> Option<&crate::contact::driver::NodalContact> {
+        self.contact.as_ref().map(|c| &c.nodal)
+    }
+
     /// Current nodal coordinates x = X + u.
     pub fn coords(&self, u: &[f64]) -> Vec<[f64; 2]> {
         self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + u[2 * n], p[1] + u[2 * n + 1]]).collect()

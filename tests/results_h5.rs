@@ -155,8 +155,13 @@ fn run_writes_results_h5_and_xdmf_matching_the_history() {
     assert_eq!(u.len(), 3 * n_nodes);
     assert!(u.iter().skip(2).step_by(3).all(|&z| z == 0.0));
 
+    check_history_table_and_contact_fields(&out, &file, &names);
+
     let xdmf = std::fs::read_to_string(out.join("results.xdmf")).unwrap();
     let tags = xml_tags(&xdmf);
+    for f in ["velocity", "contact_force", "contact_pressure", "contact_gap", "contact_status"] {
+        assert!(xdmf.contains(&format!("Attribute Name=\"{f}\"")), "{f} in results.xdmf");
+    }
     assert_eq!(tags[0], "Xdmf");
     assert!(xdmf.contains("GridType=\"Collection\" CollectionType=\"Temporal\""));
     let times: Vec<f64> = xdmf
@@ -176,6 +181,99 @@ fn run_writes_results_h5_and_xdmf_matching_the_history() {
     xml_tags(&walls);
     assert_eq!(walls.matches("<Grid Name=\"walls_").count(), expected.len());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `/history` repeats history.csv; the contact node fields are consistent with the wall forces
+/// of the history; the velocity is the step's mean velocity.
+fn check_history_table_and_contact_fields(out: &Path, file: &hdf5::File, names: &[String]) {
+    // history.csv as numbers
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let csv: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let h = file.dataset("history").unwrap();
+    assert_eq!(h.shape(), vec![csv.len(), header.len()]);
+    let cols: Vec<hdf5::types::VarLenUnicode> = h.attr("columns").unwrap().read_raw().unwrap();
+    let cols: Vec<String> = cols.iter().map(|c| c.as_str().to_string()).collect();
+    assert_eq!(cols, header, "history columns in results.h5 and history.csv");
+    let table: Vec<f64> = h.read_raw().unwrap();
+    let m = header.len();
+    for (i, row) in csv.iter().enumerate() {
+        for (j, v) in row.iter().enumerate() {
+            // history.csv keeps 10 significant digits: 1e-9 relative
+            let w = table[i * m + j];
+            assert!((w - v).abs() <= 1e-9 * v.abs() + 1e-300, "history row {i} column {}: h5 {w} vs csv {v}", header[j]);
+        }
+    }
+    let col = |name: &str| header.iter().position(|c| c == name).unwrap();
+    let (c_step, c_dt) = (col("step"), col("dt"));
+    let c_force = [col("f_left"), col("f_right"), col("f_bottom"), col("f_top")];
+
+    let steps = file.group("steps").unwrap();
+    let mut active_last = 0;
+    let mut u_prev: Option<(usize, Vec<f64>)> = None;
+    let mut velocity_checked = false;
+    for name in names {
+        let g = steps.group(name).unwrap();
+        let step: u64 = g.attr("step").unwrap().read_scalar().unwrap();
+        let row = (0..csv.len()).find(|&i| table[i * m + c_step] == step as f64).unwrap();
+        let nn = g.dataset("coordinates").unwrap().shape()[0];
+        let p: Vec<f64> = g.dataset("contact_pressure").unwrap().read_raw().unwrap();
+        let gap: Vec<f64> = g.dataset("contact_gap").unwrap().read_raw().unwrap();
+        let status: Vec<i32> = g.dataset("contact_status").unwrap().read_raw().unwrap();
+        let force: Vec<f64> = g.dataset("contact_force").unwrap().read_raw().unwrap();
+        let wall: Vec<f64> = g.dataset("wall_force").unwrap().read_raw().unwrap();
+        assert_eq!((p.len(), gap.len(), status.len(), force.len(), wall.len()), (nn, nn, nn, 3 * nn, 4 * nn));
+        // the node's pressure is positive exactly where it is in contact; frictionless
+        // penalty: sliding (1) and penetrating (gap < 0)
+        for n in 0..nn {
+            assert!((0..=1).contains(&status[n]), "status {} at node {n}", status[n]);
+            assert_eq!(status[n] > 0, p[n] > 0.0, "node {n}: status {} pressure {}", status[n], p[n]);
+            if status[n] > 0 {
+                assert!(gap[n] < 0.0, "node {n} in penalty contact with gap {}", gap[n]);
+            }
+        }
+        // the sum of the nodal wall forces is the wall force of the history (1e-8 relative,
+        // the issue's check; the values are summed in a different order)
+        let f_hist: Vec<f64> = c_force.iter().map(|&c| table[row * m + c]).collect();
+        let scale = f_hist.iter().fold(0.0f64, |a, f| a.max(f.abs()));
+        for k in 0..4 {
+            let sum: f64 = (0..nn).map(|n| wall[4 * n + k]).sum();
+            assert!((sum - f_hist[k]).abs() <= 1e-8 * f_hist[k].abs().max(1e-300) || sum == f_hist[k], "step {step} wall {k}: nodal sum {sum} vs history {}", f_hist[k]);
+        }
+        // Newton's third law: particle-particle contact forces cancel, so the contact forces
+        // on all nodes add up to the (frictionless) wall forces on the particles:
+        // x: f_left − f_right, y: f_bottom − f_top (1e-8 of the largest wall force)
+        let fx: f64 = (0..nn).map(|n| force[3 * n]).sum();
+        let fy: f64 = (0..nn).map(|n| force[3 * n + 1]).sum();
+        assert!((fx - (f_hist[0] - f_hist[1])).abs() <= 1e-8 * scale, "step {step}: Σ contact fx {fx} vs {}", f_hist[0] - f_hist[1]);
+        assert!((fy - (f_hist[2] - f_hist[3])).abs() <= 1e-8 * scale, "step {step}: Σ contact fy {fy} vs {}", f_hist[2] - f_hist[3]);
+        // the contact force on the nodes that touch a wall is that wall's push (the walls
+        // push inwards: +x left, −x right, +y bottom, −y top); at solid ratio ≤ 0.74 no node
+        // touching a wall touches another disc, so the sums are the history's wall forces
+        for (k, (c, sign)) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)].into_iter().enumerate() {
+            let sum: f64 = (0..nn).filter(|&n| wall[4 * n + k] > 0.0).map(|n| sign * force[3 * n + c]).sum();
+            assert!((sum - f_hist[k]).abs() <= 1e-8 * scale, "step {step} wall {k}: contact force on its nodes {sum} vs history {}", f_hist[k]);
+        }
+        active_last = status.iter().filter(|&&s| s > 0).count();
+        // velocity = (u_s − u_{s−1}) / Δt_s where two consecutive steps are in the file
+        let u: Vec<f64> = g.dataset("displacement").unwrap().read_raw().unwrap();
+        let v: Vec<f64> = g.dataset("velocity").unwrap().read_raw().unwrap();
+        assert_eq!(v.len(), 3 * nn);
+        if let Some((s_prev, up)) = &u_prev {
+            if *s_prev + 1 == step as usize {
+                let dt = table[row * m + c_dt];
+                for i in 0..3 * nn {
+                    let expect = (u[i] - up[i]) / dt;
+                    assert!((v[i] - expect).abs() <= 1e-9 * (expect.abs() + 1.0), "velocity dof {i}: {} vs {expect}", v[i]);
+                }
+                velocity_checked = true;
+            }
+        }
+        u_prev = Some((step as usize, u));
+    }
+    assert!(active_last > 0, "contacts at the last output step");
+    assert!(velocity_checked, "two consecutive steps in the file (the last step follows an output step)");
 }
 
 #[test]

@@ -68,6 +68,71 @@ fn violation(kind: ContactKind, gap: f64, shear: f64, slip: bool, old: &PairHist
     normal.max(tangential)
 }
 
+/// Contact state per node (global node numbers) at one evaluation, for the results files.
+/// Every node-to-segment pair contributes to its slave node (two-pass: each boundary node is a
+/// slave of its own pairs), every node-to-wall pair to its node.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodalContact {
+    /// Normal contact pressure (MPa, ≥ 0 in compression): the sum over the node's pairs of the
+    /// pair's share (weight) times its pressure, or the wall pressure when that is larger.
+    pub pressure: Vec<f64>,
+    /// Smallest normal gap of the node over its pairs and the walls (mm, negative =
+    /// penetration); NaN for a node without any candidate.
+    pub gap: Vec<f64>,
+    /// 0 open, 1 sliding (frictionless, or Coulomb slip), 2 sticking, 3 tied (the largest over
+    /// the node's pairs).
+    pub status: Vec<i32>,
+    /// Force the contacts exert on the node (N/mm): the slave's and the master nodes' shares.
+    pub force: Vec<[f64; 2]>,
+    /// Normal force each node exerts on each wall (N/mm, compression positive), `[wall][node]`;
+    /// summed over the nodes it is the wall force of the history.
+    pub wall_force: Vec<Vec<f64>>,
+}
+
+impl NodalContact {
+    fn reset(&mut self, n_nodes: usize, n_walls: usize) {
+        self.pressure.clear();
+        self.pressure.resize(n_nodes, 0.0);
+        self.gap.clear();
+        self.gap.resize(n_nodes, f64::NAN);
+        self.status.clear();
+        self.status.resize(n_nodes, 0);
+        self.force.clear();
+        self.force.resize(n_nodes, [0.0; 2]);
+        self.wall_force.resize(n_walls, Vec::new());
+        for w in &mut self.wall_force {
+            w.clear();
+            w.resize(n_nodes, 0.0);
+        }
+    }
+
+    fn gap(&mut self, node: usize, g: f64) {
+        if g.is_finite() && !(self.gap[node] <= g) {
+            self.gap[node] = g;
+        }
+    }
+
+    /// Record an active pair of `kind` acting on `node` with pressure share `p`.
+    fn active(&mut self, node: usize, p: f64, kind: ContactKind, slip: bool) {
+        let s = match kind {
+            ContactKind::Cohering => 3,
+            ContactKind::Sliding => 1,
+            ContactKind::Rubbing { mu } if slip || !(mu > 0.0) => 1,
+            ContactKind::Rubbing { .. } => 2,
+        };
+        self.status[node] = self.status[node].max(s);
+        self.pressure[node] += p;
+    }
+
+    /// Add the force −f (f: the contribution to the internal force) on `nodes`.
+    fn force(&mut self, nodes: &[usize], f: &[f64]) {
+        for (i, &n) in nodes.iter().enumerate() {
+            self.force[n][0] -= f[2 * i];
+            self.force[n][1] -= f[2 * i + 1];
+        }
+    }
+}
+
 pub struct ContactProblem {
     pub walls: Vec<WallSpec>,
     pub spec: ContactSpec,
@@ -95,6 +160,9 @@ pub struct ContactProblem {
     pub wall_reach: f64,
     /// Time of the configuration `select_pairs` is given (s).
     pub time: f64,
+    /// Nodal contact state of the last evaluation, and of the last committed step.
+    trial_nodal: NodalContact,
+    pub nodal: NodalContact,
 }
 
 /// A constraint carrying a Lagrange multiplier: a frozen node-to-segment pair (index into the
@@ -227,6 +295,8 @@ impl ContactProblem {
             lm: Multipliers::default(),
             wall_reach: 0.0,
             time: 0.0,
+            trial_nodal: NodalContact::default(),
+            nodal: NodalContact::default(),
         })
     }
 
@@ -416,6 +486,7 @@ impl ContactProblem {
     /// candidate k being equation `n_free + k`.
     fn add_lagrange(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize], usize)>) -> ContactStats {
         let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
+        self.trial_nodal.reset(x.len(), self.walls.len());
         let walls: Vec<Wall> = self.walls.iter().map(|w| Wall::from_spec(w, t)).collect();
         let no_penalty = PenaltyParams { eps_n: 0.0, eps_t: 0.0 };
         let mut out = PairOut::default();
@@ -464,6 +535,22 @@ impl ContactProblem {
                 f_int[d] -= lambda * area * grad[i];
             }
             let active = lambda - c * gap > 0.0;
+            let slave_node = dofs[0] / 2;
+            self.trial_nodal.gap(slave_node, gap);
+            if active && lambda > 0.0 {
+                let f: Vec<f64> = grad.iter().map(|g| -lambda * area * g).collect();
+                let nodes: Vec<usize> = dofs.iter().step_by(2).map(|d| d / 2).collect();
+                self.trial_nodal.force(&nodes, &f);
+                let share = match cand {
+                    Candidate::Pair(q) => lambda * self.pairs[q].weight,
+                    Candidate::Wall { .. } => 0.0,
+                };
+                self.trial_nodal.active(slave_node, share, ContactKind::Sliding, true);
+                if let Candidate::Wall { wall, .. } = cand {
+                    self.trial_nodal.wall_force[wall][slave_node] += lambda * area;
+                    self.trial_nodal.pressure[slave_node] = self.trial_nodal.pressure[slave_node].max(lambda);
+                }
+            }
             self.lm.scale[k] = c;
             self.lm.rows[k] = if active { -c * area * gap } else { -area * lambda };
             if let Some((m, eq, n_free)) = kk.as_mut() {
@@ -527,6 +614,7 @@ impl ContactProblem {
             return self.add_lagrange(x, t, f_int, kk);
         }
         let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
+        self.trial_nodal.reset(x.len(), self.walls.len());
         let mut out = PairOut::default();
         for (k, p) in self.pairs.iter().enumerate() {
             let (node, body) = self.slaves[p.slave];
@@ -537,12 +625,15 @@ impl ContactProblem {
             kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave] * p.weight, kind, &params, &old, &mut out);
             self.trial_nts[k] = out.new_history;
             self.aug_nts[k] = kernels::augment(&old, &out);
+            self.trial_nodal.gap(node, out.gap);
             if !out.active {
                 continue;
             }
             stats.active += 1;
             stats.max_penetration = stats.max_penetration.max(-out.gap);
             stats.violation = stats.violation.max(violation(kind, out.gap, out.shear, out.slip, &old, params.eps_t));
+            self.trial_nodal.active(node, p.weight * out.pressure, kind, out.slip);
+            self.trial_nodal.force(&[node, s.nodes[0], s.nodes[1]], &out.f);
             let dofs = [2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
             for i in 0..6 {
                 f_int[dofs[i]] += out.f[i];
@@ -566,6 +657,7 @@ impl ContactProblem {
                 kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
                 self.trial_wall[w][i] = wout.new_history;
                 self.aug_wall[w][i] = kernels::augment_wall(&old, &wout);
+                self.trial_nodal.gap(node, wout.gap);
                 if !wout.active {
                     continue;
                 }
@@ -573,6 +665,10 @@ impl ContactProblem {
                 stats.max_penetration = stats.max_penetration.max(-wout.gap);
                 stats.violation = stats.violation.max(violation(spec.kind, wout.gap, wout.shear, wout.slip, &old, params.eps_t));
                 stats.wall_force[w] += wout.pressure * self.area[i];
+                self.trial_nodal.wall_force[w][node] += wout.pressure * self.area[i];
+                self.trial_nodal.force(&[node], &wout.f);
+                self.trial_nodal.active(node, 0.0, spec.kind, wout.slip);
+                self.trial_nodal.pressure[node] = self.trial_nodal.pressure[node].max(wout.pressure);
                 let dofs = [2 * node, 2 * node + 1];
                 for c in 0..2 {
                     f_int[dofs[c]] += wout.f[c];
@@ -667,6 +763,7 @@ impl ContactProblem {
         }
         self.nts_hist = next;
         self.wall_hist.clone_from(&self.trial_wall);
+        self.nodal.clone_from(&self.trial_nodal);
         if self.spec.method == ContactMethod::Lagrange {
             self.lm.committed = self.lm.keys.iter().zip(&self.lm.lambda).filter(|(_, &l)| l > 0.0).map(|(k, &l)| (*k, l)).collect();
         }
