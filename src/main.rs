@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mpfem::case::{self, Case};
 use mpfem::model::Model;
-use mpfem::output::{write_summary, HistoryWriter, SummaryFile};
+use mpfem::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
 use mpfem::results::ResultsWriter;
 use mpfem::solver::Simulation;
 use std::io::IsTerminal;
@@ -121,7 +121,8 @@ fn main() -> ExitCode {
                 },
                 None => (case::default_case(), "built-in default job (jobs/default.toml)".to_string()),
             };
-            match run(c, &label, &out, threads, quiet) {
+            let case_file = case.as_ref().map(|p| CaseFile::describe(p));
+            match run(c, &label, case_file, &out, threads, quiet) {
                 Ok(code) => code,
                 Err(e) => {
                     eprintln!("error: {e:#}");
@@ -150,7 +151,36 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool) -> anyhow::Result<ExitCode> {
+/// Which case file a run used: its path and the SHA-256 of its text (the version of the case
+/// that produced the results), for `summary.json`.
+#[derive(serde::Serialize)]
+struct CaseFile {
+    path: String,
+    sha256: String,
+}
+
+impl CaseFile {
+    fn describe(path: &Path) -> Self {
+        use sha2::Digest;
+        let sha256 = std::fs::read(path)
+            .map(|b| sha2::Sha256::digest(&b).iter().map(|x| format!("{x:02x}")).collect())
+            .unwrap_or_default();
+        Self { path: path.display().to_string(), sha256 }
+    }
+}
+
+/// How far a run is, in [0, 1]: the larger of the time fraction and, with a target solid
+/// ratio, the fraction of the way from the initial to the target solid ratio.
+fn progress(time: f64, t_end: f64, solid: Option<(f64, f64, f64)>) -> f64 {
+    let by_time = if t_end > 0.0 { time / t_end } else { 0.0 };
+    let by_density = match solid {
+        Some((phi0, phi, target)) if target > phi0 => (phi - phi0) / (target - phi0),
+        _ => 0.0,
+    };
+    by_time.max(by_density).clamp(0.0, 1.0)
+}
+
+fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool) -> anyhow::Result<ExitCode> {
     if let Some(t) = threads {
         c.solver.threads = t;
     }
@@ -182,35 +212,67 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
     );
 
     let t_end = c.time.end;
-    let bar = if quiet {
+    let target = c.stop.solid_ratio;
+    let tty = std::io::stderr().is_terminal();
+    let bar = if quiet || !tty {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
         b.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} t = {msg}").unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {percent:>3}% ETA {eta} {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
+        b.enable_steady_tick(std::time::Duration::from_millis(250));
         b
     };
-    let tty = std::io::stderr().is_terminal();
+    // without a terminal (batch jobs, CI): a plain line every 10 % of the run and at least
+    // every minute
     let mut next_note = 0.1;
+    let mut last_note = Instant::now();
+    let mut phi0: Option<f64> = None;
+    let mut max_body_volume_error = 0.0f64;
+    let mut history_s = 0.0;
     let mut io_error: Option<std::io::Error> = None;
     let mut results_error: Option<mpfem::results::ResultsError> = None;
     let mut last_report: Option<mpfem::solver::StepReport> = None;
     let result = sim.run(&mut |s, r| {
         last_report = Some(r.clone());
+        max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
+        let t_out = Instant::now();
         if let Err(e) = history.write(r) {
             io_error.get_or_insert(e);
         }
+        history_s += t_out.elapsed().as_secs_f64();
         if let (Some(w), None) = (results.as_mut(), &results_error) {
             if let Err(e) = w.observe(s, r) {
                 results_error = Some(e);
             }
         }
-        bar.set_position((1000.0 * r.time / t_end) as u64);
-        bar.set_message(format!("{:.4e} s, step {}, dt {:.2e}, {} it", r.time, r.step, r.dt, r.newton_iterations));
-        if !tty && !quiet && r.time >= next_note * t_end {
-            eprintln!("  t = {:.4e} s ({:.0} %), step {}, {} Newton iterations, volume error {:.2e}", r.time, 100.0 * r.time / t_end, r.step, r.newton_iterations, r.volume_error);
-            next_note += 0.1;
+        let phi = r.compaction.as_ref().map(|c| c.solid_ratio);
+        if phi0.is_none() {
+            // the first step's solid ratio stands in for the initial one (the first
+            // increment is small)
+            phi0 = phi;
+        }
+        let solid = match (phi0, phi, target) {
+            (Some(a), Some(b), Some(t)) => Some((a, b, t)),
+            _ => None,
+        };
+        let done = progress(r.time, t_end, solid);
+        let density = match (phi, target) {
+            (Some(p), Some(t)) => format!("solid ratio {p:.4} → {t} | "),
+            (Some(p), None) => format!("solid ratio {p:.4} | "),
+            _ => String::new(),
+        };
+        let line = format!("{density}t {:.4e} s | step {} | dt {:.2e} | {} it", r.time, r.step, r.dt, r.newton_iterations);
+        bar.set_position((1000.0 * done) as u64);
+        bar.set_message(line.clone());
+        if !tty && !quiet && (done >= next_note || last_note.elapsed().as_secs() >= 60) {
+            eprintln!("  {:3.0} % | {line} | volume error {:.2e} | {:.0} s", 100.0 * done, r.volume_error, started.elapsed().as_secs_f64());
+            while next_note <= done {
+                next_note += 0.1;
+            }
+            last_note = Instant::now();
         }
     });
     bar.finish_and_clear();
@@ -231,16 +293,22 @@ fn run(mut c: Case, label: &str, out: &Path, threads: Option<usize>, quiet: bool
         Err(e) => ("failed", Some(e.to_string()), None),
     };
     let last_step = summary.and_then(|s| s.last.as_ref());
+    let wall_time_s = started.elapsed().as_secs_f64();
+    let output_s = history_s + results.as_ref().map_or(0.0, |w| w.elapsed_s);
+    let t = &sim.timing;
     let file = SummaryFile {
         mpfem_version: env!("CARGO_PKG_VERSION"),
         title: &title,
+        case: case_file.as_ref().map(|c| serde_json::json!({ "path": c.path, "sha256": c.sha256 })),
         status,
         error: error.clone(),
         formulation,
         n_bodies,
         n_nodes,
         n_elements,
-        wall_time_s: started.elapsed().as_secs_f64(),
+        wall_time_s,
+        final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
+        phases: Phases::split(t, output_s, wall_time_s),
         run: summary,
         last_step,
     };

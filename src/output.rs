@@ -131,11 +131,81 @@ pub fn history_values(r: &StepReport) -> Vec<f64> {
     v
 }
 
+/// The state at the end of a run (the last converged step), for `summary.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct FinalState {
+    pub step: usize,
+    pub time: f64,
+    /// Solid ratio (None without a die of four walls).
+    pub solid_ratio: Option<f64>,
+    /// Wall pressures and forces (MPa, N/mm) in the order left, right, bottom, top.
+    pub pressure: Option<[f64; 4]>,
+    pub force: Option<[f64; 4]>,
+    /// |A − A₀|/A₀ over all particles at the end, and the largest per-particle value over the
+    /// whole run.
+    pub volume_error: f64,
+    pub max_particle_volume_error: f64,
+    /// Work against the stabilisation springs / external work of the walls.
+    pub stabilisation_ratio: Option<f64>,
+}
+
+impl FinalState {
+    pub fn of(r: &StepReport, max_particle_volume_error: f64) -> Self {
+        let c = r.compaction.as_ref();
+        Self {
+            step: r.step,
+            time: r.time,
+            solid_ratio: c.map(|c| c.solid_ratio).filter(|p| *p > 0.0),
+            pressure: c.map(|c| c.pressure),
+            force: c.map(|c| c.force),
+            volume_error: r.volume_error,
+            max_particle_volume_error,
+            stabilisation_ratio: c.filter(|c| c.external_work > 0.0).map(|c| c.stabilisation_energy / c.external_work),
+        }
+    }
+}
+
+/// Wall-clock time per phase of a run (s) and their shares of the total.
+#[derive(Clone, Debug, Serialize)]
+pub struct Phases {
+    pub contact_search: f64,
+    pub contact_assembly: f64,
+    pub element_assembly: f64,
+    pub linear_solve: f64,
+    /// history.csv and results.h5/xdmf.
+    pub output: f64,
+    /// Everything else (set-up, predictors, bookkeeping).
+    pub other: f64,
+    pub total: f64,
+    /// Each phase's share of `total` (%), same order as above.
+    pub percent: [f64; 6],
+}
+
+impl Phases {
+    pub fn split(t: &crate::solver::Timing, output: f64, total: f64) -> Self {
+        let parts = [t.contact_search, t.contact_assembly, t.element_assembly, t.linear_solve, output];
+        let other = (total - parts.iter().sum::<f64>()).max(0.0);
+        let share = |v: f64| if total > 0.0 { 100.0 * v / total } else { 0.0 };
+        Self {
+            contact_search: parts[0],
+            contact_assembly: parts[1],
+            element_assembly: parts[2],
+            linear_solve: parts[3],
+            output,
+            other,
+            total,
+            percent: [share(parts[0]), share(parts[1]), share(parts[2]), share(parts[3]), share(output), share(other)],
+        }
+    }
+}
+
 /// Contents of `summary.json`.
 #[derive(Serialize)]
 pub struct SummaryFile<'a> {
     pub mpfem_version: &'static str,
     pub title: &'a str,
+    /// The case file (path, SHA-256 of its text); None for the built-in default job.
+    pub case: Option<serde_json::Value>,
     /// "completed" or "failed".
     pub status: &'a str,
     pub error: Option<String>,
@@ -144,6 +214,10 @@ pub struct SummaryFile<'a> {
     pub n_nodes: usize,
     pub n_elements: usize,
     pub wall_time_s: f64,
+    /// The last converged step (also of a failed run).
+    #[serde(rename = "final")]
+    pub final_state: Option<FinalState>,
+    pub phases: Phases,
     pub run: Option<&'a RunSummary>,
     pub last_step: Option<&'a StepReport>,
 }

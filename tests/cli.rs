@@ -19,8 +19,14 @@ fn tmpdir(name: &str) -> PathBuf {
 #[test]
 fn default_job_runs_and_writes_history_and_summary() {
     let out = tmpdir("default");
-    let st = mpfem().args(["run", "--quiet", "--out"]).arg(&out).status().unwrap();
-    assert!(st.success());
+    let o = mpfem().args(["run", "--out"]).arg(&out).output().unwrap();
+    assert!(o.status.success());
+    // stderr is not a terminal here: plain progress lines instead of a bar, one per 10 % of
+    // the run, the last at 100 %
+    let err = String::from_utf8_lossy(&o.stderr);
+    let progress: Vec<&str> = err.lines().filter(|l| l.contains(" % | t ")).collect();
+    assert!((5..=12).contains(&progress.len()), "progress lines: {progress:?}");
+    assert!(progress.last().is_some_and(|l| l.trim_start().starts_with("100 %") && l.contains("step")), "{progress:?}");
     let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
     let mut lines = hist.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -156,6 +156,7 @@ fn run_writes_results_h5_and_xdmf_matching_the_history() {
     assert!(u.iter().skip(2).step_by(3).all(|&z| z == 0.0));
 
     check_history_table_and_contact_fields(&out, &file, &names);
+    check_summary(&out, &case);
 
     let xdmf = std::fs::read_to_string(out.join("results.xdmf")).unwrap();
     let tags = xml_tags(&xdmf);
@@ -181,6 +182,41 @@ fn run_writes_results_h5_and_xdmf_matching_the_history() {
     xml_tags(&walls);
     assert_eq!(walls.matches("<Grid Name=\"walls_").count(), expected.len());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// summary.json: the final state is the last history row, the phases add up to the wall time,
+/// the case file is identified by the SHA-256 of its text.
+fn check_summary(out: &Path, case: &Path) {
+    use sha2::Digest;
+    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["status"], "completed");
+    assert_eq!(s["mpfem_version"], env!("CARGO_PKG_VERSION"));
+    let sha: String = sha2::Sha256::digest(std::fs::read(case).unwrap()).iter().map(|x| format!("{x:02x}")).collect();
+    assert_eq!(s["case"]["sha256"], sha.as_str());
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let last: Vec<f64> = text.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    let col = |name: &str| last[header.iter().position(|c| *c == name).unwrap()];
+    let f = &s["final"];
+    assert_eq!(f["step"].as_f64().unwrap(), col("step"));
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-12);
+    assert!(close(f["solid_ratio"].as_f64().unwrap(), col("solid_ratio")));
+    assert!(s["run"]["stop_reason"] == "solid ratio reached" && col("solid_ratio") >= 0.74);
+    for (k, side) in ["left", "right", "bottom", "top"].iter().enumerate() {
+        assert!(close(f["pressure"][k].as_f64().unwrap(), col(&format!("p_{side}"))), "p_{side}");
+        assert!(close(f["force"][k].as_f64().unwrap(), col(&format!("f_{side}"))), "f_{side}");
+    }
+    let vmax = f["max_particle_volume_error"].as_f64().unwrap();
+    let vcol = header.iter().position(|c| *c == "volume_error_max_body").unwrap();
+    let hist_max = text.lines().skip(1).map(|l| l.split(',').nth(vcol).unwrap().parse::<f64>().unwrap()).fold(0.0, f64::max);
+    assert!(close(vmax, hist_max), "max particle volume error {vmax} vs history {hist_max}");
+    let p = &s["phases"];
+    let total = p["total"].as_f64().unwrap();
+    let sum: f64 = ["contact_search", "contact_assembly", "element_assembly", "linear_solve", "output", "other"].iter().map(|k| p[k].as_f64().unwrap()).sum();
+    assert!((sum - total).abs() <= 1e-9 * total, "phases {sum} vs total {total}");
+    assert!(p["output"].as_f64().unwrap() > 0.0 && p["linear_solve"].as_f64().unwrap() > 0.0);
+    let pct: f64 = p["percent"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).sum();
+    assert!((pct - 100.0).abs() < 1e-6, "shares add up to {pct} %");
 }
 
 /// `/history` repeats history.csv; the contact node fields are consistent with the wall forces
