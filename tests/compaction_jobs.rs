@@ -13,10 +13,14 @@
 //!   1e-8 of the largest displacement (the criterion), and the opposite walls must carry
 //!   the same pressure (1e-8 relative). Measured: 1e-14 to 6e-14 on the three frictional jobs.
 //!   Exception, stated: the three FRICTIONLESS jobs, where each disc's rotation is a
-//!   zero-energy mode held only by the weak (ζ = 1e-5) stabilisation, so round-off is
-//!   amplified: wall pressures agree to 1e-12 (vertical), 3e-6 (lateral) and 2e-5 (biaxial)
-//!   and those jobs are held to 1e-4 on the pressures only — their displacement fields differ
-//!   by the (arbitrary, zero-energy) disc rotations, 3e-8 to 6e-2 of the largest displacement.
+//!   near-zero-energy mode held only by the weak (ζ = 1e-5) stabilisation. At the default
+//!   Newton tolerance (1e-8) the unconverged part of the solution put an arbitrary rotation in
+//!   and opposite walls differed by up to 3e-5; these jobs therefore run at
+//!   `residual_tol = 1e-11`, and their wall pressures agree to 2e-12 (held to 1e-8 like the
+//!   others). Their displacement fields still differ by round-off amplified through the
+//!   rotational modes, 3.8e-8 (lateral), 8.2e-8 (vertical), < 1e-8 (biaxial) of the largest
+//!   displacement, unchanged by tighter Newton tolerances (1e-12 / energy 1e-24 give the same
+//!   iterates): they are held to 1e-6 on displacements.
 
 use mpfem::case;
 use mpfem::model::Model;
@@ -25,8 +29,8 @@ use std::collections::HashMap;
 
 /// Tolerance of the symmetry checks (relative to the largest displacement / the pressure).
 const SYMMETRY_TOL: f64 = 1e-8;
-/// Frictionless jobs (see the module docs).
-const SYMMETRY_TOL_FREE_ROTATION: f64 = 1e-4;
+/// Displacement symmetry of the frictionless jobs (see the module docs).
+const SYMMETRY_TOL_FREE_ROTATION: f64 = 1e-6;
 
 fn run_job(name: &str) -> (Simulation, Compaction, String) {
     let path = format!("jobs/compaction/{name}");
@@ -89,15 +93,13 @@ fn check(name: &str, moving: &[usize], symmetry_tol: f64) {
         let (pa, pb) = (last.pressure[a], last.pressure[b]);
         if pa > 0.0 || pb > 0.0 {
             let rel = (pa - pb).abs() / pa.abs().max(pb.abs());
-            assert!(rel < symmetry_tol, "{name}: walls {a} and {b} carry {pa} and {pb} MPa ({rel:.2e})");
+            assert!(rel < SYMMETRY_TOL, "{name}: walls {a} and {b} carry {pa} and {pb} MPa ({rel:.2e})");
         }
     }
     let mx = mirror_mismatch(&sim, 0, 50.0);
     let my = mirror_mismatch(&sim, 1, 50.0);
     eprintln!("{name}: mirror mismatch x {mx:.2e}, y {my:.2e}");
-    if symmetry_tol <= SYMMETRY_TOL {
-        assert!(mx < symmetry_tol && my < symmetry_tol, "{name}: symmetry lost: {mx:.2e} (x), {my:.2e} (y)");
-    }
+    assert!(mx < symmetry_tol && my < symmetry_tol, "{name}: symmetry lost: {mx:.2e} (x), {my:.2e} (y)");
 }
 
 #[test]
