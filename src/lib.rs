@@ -32,5 +32,6 @@ pub mod model;
 pub mod output;
 pub mod results;
 pub mod packing;
+pub mod plot;
 pub mod solver;
 pub mod verify;

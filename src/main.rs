@@ -4,8 +4,10 @@
 //! mpfem run [CASE.toml] [--out DIR]   run a case (no case: the built-in default job)
 //! mpfem check CASE.toml               validate a case without running it
 //! mpfem verify                        run the verification set and print the table
+//! mpfem plot DIR [--compare DIR2 ...]  redraw the plots of a results folder
 //! ```
-//! Exit codes: 0 success, 1 the run or a verification failed, 2 bad input (case file, paths).
+//! Exit codes: 0 success, 1 the run or a verification failed (or `plot` could not draw),
+//! 2 bad input (case file, paths, steps).
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -13,6 +15,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mpfem::case::{self, Case};
 use mpfem::model::Model;
 use mpfem::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
+use mpfem::plot::{PlotRequest, RunDir, StepChoice, StepSpec};
 use mpfem::results::ResultsWriter;
 use mpfem::solver::Simulation;
 use std::io::IsTerminal;
@@ -45,6 +48,31 @@ enum Command {
         /// No progress bar.
         #[arg(short, long)]
         quiet: bool,
+        /// Do not draw the plots (pressure.png/.svg, snapshot_step_N.png) at the end of the run.
+        #[arg(long)]
+        no_plots: bool,
+    },
+    /// Redraw the plots of a results folder: wall pressure against solid ratio
+    /// (pressure.png, pressure.svg) and snapshots coloured by von Mises stress
+    /// (snapshot_step_N.png); with --compare, the pressures of several runs in one plot
+    /// (pressure_compare.png, pressure_compare.svg).
+    Plot {
+        /// The results folder written by `mpfem run --out DIR`.
+        dir: PathBuf,
+        /// More results folders whose pressures are overlaid on DIR's (repeatable).
+        #[arg(long, value_name = "DIR2")]
+        compare: Vec<PathBuf>,
+        /// Legend label of each run, in the order DIR, DIR2, ... (repeatable; default: the
+        /// folder names).
+        #[arg(long)]
+        label: Vec<String>,
+        /// Output steps to draw as snapshots, comma separated: step numbers of history.csv,
+        /// `first`, `last` (default: about 4 spread over the output steps, the last included).
+        #[arg(long, value_delimiter = ',', value_parser = parse_step)]
+        steps: Option<Vec<StepSpec>>,
+        /// Where to write the pictures (default: DIR).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
     },
     /// Validate a case file without running it.
     Check {
@@ -110,7 +138,8 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Command::Run { case, out, threads, quiet } => {
+        Command::Plot { dir, compare, label, steps, out } => plot(dir, compare, label, steps, out),
+        Command::Run { case, out, threads, quiet, no_plots } => {
             let (c, label) = match &case {
                 Some(p) => match case::load(p) {
                     Ok(c) => (c, p.display().to_string()),
@@ -122,7 +151,7 @@ fn main() -> ExitCode {
                 None => (case::default_case(), "built-in default job (jobs/default.toml)".to_string()),
             };
             let case_file = case.as_ref().map(|p| CaseFile::describe(p));
-            match run(c, &label, case_file, &out, threads, quiet) {
+            match run(c, &label, case_file, &out, threads, quiet, !no_plots) {
                 Ok(code) => code,
                 Err(e) => {
                     eprintln!("error: {e:#}");
@@ -180,7 +209,75 @@ fn progress(time: f64, t_end: f64, solid: Option<(f64, f64, f64)>) -> f64 {
     by_time.max(by_density).clamp(0.0, 1.0)
 }
 
-fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool) -> anyhow::Result<ExitCode> {
+fn parse_step(s: &str) -> Result<StepSpec, String> {
+    s.parse()
+}
+
+/// `mpfem plot`: exit 0 when drawn, 2 on bad input (folders, files, steps, labels), 1 when the
+/// drawing itself fails.
+fn plot(dir: PathBuf, compare: Vec<PathBuf>, labels: Vec<String>, steps: Option<Vec<StepSpec>>, out: Option<PathBuf>) -> ExitCode {
+    let dirs: Vec<PathBuf> = std::iter::once(dir).chain(compare).collect();
+    if !labels.is_empty() && labels.len() != dirs.len() {
+        eprintln!("error: --label given {} time(s) for {} run(s): expected one label per results folder (DIR, then each --compare)", labels.len(), dirs.len());
+        return ExitCode::from(2);
+    }
+    let runs: Vec<RunDir> = dirs
+        .iter()
+        .enumerate()
+        .map(|(i, d)| RunDir { dir: d.clone(), label: labels.get(i).cloned().unwrap_or_else(|| mpfem::plot::default_label(d)) })
+        .collect();
+    let req = PlotRequest {
+        out: out.unwrap_or_else(|| dirs[0].clone()),
+        runs,
+        steps: match steps {
+            Some(s) => StepChoice::Explicit(s),
+            None => StepChoice::Spread(mpfem::plot::DEFAULT_SNAPSHOTS),
+        },
+    };
+    match mpfem::plot::plot_results(&req) {
+        Ok(r) => {
+            for s in &r.skipped {
+                eprintln!("mpfem: {s}");
+            }
+            report_plots(&r);
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(if e.is_input() { 2 } else { 1 })
+        }
+    }
+}
+
+fn report_plots(r: &mpfem::plot::PlotReport) {
+    if r.written.is_empty() {
+        eprintln!("mpfem: no plots written");
+    } else {
+        let names: Vec<String> = r.written.iter().map(|p| p.display().to_string()).collect();
+        eprintln!("mpfem: wrote plots {}", names.join(", "));
+    }
+}
+
+/// The plots at the end of `mpfem run`, from whatever the run wrote; failures are warnings.
+fn plots_after_run(out: &Path) {
+    let label = mpfem::plot::default_label(out);
+    let req = PlotRequest {
+        runs: vec![RunDir { dir: out.to_path_buf(), label }],
+        out: out.to_path_buf(),
+        steps: StepChoice::Spread(mpfem::plot::DEFAULT_SNAPSHOTS),
+    };
+    match mpfem::plot::plot_results(&req) {
+        Ok(r) => {
+            for s in &r.skipped {
+                eprintln!("mpfem: {s}");
+            }
+            report_plots(&r)
+        }
+        Err(e) => eprintln!("warning: plots: {e} (the results are written; `mpfem plot {}` redraws them)", out.display()),
+    }
+}
+
+fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool) -> anyhow::Result<ExitCode> {
     if let Some(t) = threads {
         c.solver.threads = t;
     }
@@ -193,6 +290,8 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         }
     };
     let mut history = HistoryWriter::create(out, &model).with_context(|| format!("cannot write {}/history.csv", out.display()))?;
+    // pictures of an earlier run in the same folder would not match the new results
+    mpfem::plot::remove_old_plots(out);
     let mut results = match c.output.every {
         0 => None,
         every => Some(ResultsWriter::create(out, every, &mpfem::output::history_columns(&model)).with_context(|| format!("cannot write the results in {}", out.display()))?),
@@ -313,7 +412,7 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         last_step,
     };
     let summary_path = write_summary(out, &file).with_context(|| format!("cannot write {}/summary.json", out.display()))?;
-    match result {
+    let code = match result {
         Ok(s) => {
             eprintln!(
                 "mpfem: completed ({}) t = {} s in {} steps, {} Newton iterations, {} cut-backs, {:.2} s wall; volume error {:.2e}",
@@ -337,7 +436,7 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
                 ),
                 None => eprintln!("mpfem: wrote {} and {}", history.path.display(), summary_path.display()),
             }
-            Ok(ExitCode::SUCCESS)
+            ExitCode::SUCCESS
         }
         Err(e) => {
             eprintln!("error: the run stopped at t = {} s: {e}", sim.sol.time);
@@ -351,7 +450,14 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
                 ),
                 None => eprintln!("mpfem: results up to the last converged step are in {} and {}", history.path.display(), summary_path.display()),
             }
-            Ok(ExitCode::from(1))
+            ExitCode::from(1)
         }
+    };
+    // the results file is closed before the plots read it
+    drop(results);
+    drop(history);
+    if plots {
+        plots_after_run(out);
     }
+    Ok(code)
 }
