@@ -190,7 +190,11 @@ pub enum Candidate {
 /// lateral job runs to solid ratio 0.95 only with `stabilisation_kind = "viscous"` and
 /// `stabilise = "unsupported"`, and its wall pressure at 0.94 is then 5 % below the penalty
 /// one (it fails near solid ratio 0.75 with the default inertial stabilisation); one-pass
-/// pairs agree with the penalty within 1.5 % up to 0.85 but jam near 0.92.
+/// pairs agree with the penalty within 1.5 % up to 0.85 but jam near 0.92 (seen again on
+/// 2026-11-22: the one-pass choice breaks the mirror symmetry, the frictionless apex-to-apex
+/// columns of discs then buckle and slide past each other, and an element inverts at 0.88).
+/// The biaxial job runs: `jobs/compaction/discs_2x2_biaxial_lagrange.toml` reaches 0.95 with
+/// a penetration of 1e-14 mm and the wall pressure 2.0 % below the penalty job's.
 #[derive(Clone, Debug, Default)]
 pub struct Multipliers {
     pub candidates: Vec<Candidate>,
