@@ -188,6 +188,10 @@ pub struct ContactSpec {
     pub regularisation: f64,
     /// Search distance (mm); `None` = one element size.
     pub search_distance: Option<f64>,
+    /// Lagrange multipliers: an active constraint is g + r λ / c = 0 (c the default penalty),
+    /// a perturbed Lagrangian that keeps the system regular where two candidates constrain the
+    /// same gap (a node facing a node, symmetric ties). 0 = exact constraints.
+    pub lagrange_regularisation: f64,
 }
 
 impl Default for ContactSpec {
@@ -203,6 +207,7 @@ impl Default for ContactSpec {
             stabilisation_kind: StabilisationKind::Inertial,
             regularisation: 0.0,
             search_distance: None,
+            lagrange_regularisation: 1e-4,
         }
     }
 }
@@ -681,6 +686,7 @@ mod raw {
         pub stabilisation_kind: Option<String>,
         pub regularisation: Option<f64>,
         pub search_distance: Option<f64>,
+        pub lagrange_regularisation: Option<f64>,
     }
 
     #[derive(Deserialize)]
@@ -1969,6 +1975,10 @@ impl Cx<'_> {
         }
         if let Some(v) = c.regularisation {
             spec.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;
+        }
+        if let Some(v) = c.lagrange_regularisation {
+            spec.lagrange_regularisation =
+                self.num("contact.lagrange_regularisation", v, (0.0..1.0).contains(&v), "a regularisation factor r with 0 <= r < 1 (0 = exact constraints)")?;
         }
         if let Some(v) = c.search_distance {
             spec.search_distance = if v == 0.0 { None } else { Some(self.positive("contact.search_distance", v, "a distance in mm (0 = one element size)")?) };

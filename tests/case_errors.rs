@@ -557,3 +557,15 @@ fn never_panics_on_garbage() {
         }
     }
 }
+
+#[test]
+fn lagrange_regularisation_is_checked_and_defaults_to_1e_4() {
+    let c = parse(BASE).unwrap();
+    assert_eq!(c.contact.lagrange_regularisation, 1e-4);
+    let c = parse(&format!("{BASE}\n[contact]\nlagrange_regularisation = 0.0\n")).unwrap();
+    assert_eq!(c.contact.lagrange_regularisation, 0.0);
+    for v in ["-0.001", "1", "2.5"] {
+        let e = err_of(&format!("{BASE}\n[contact]\nlagrange_regularisation = {v}\n"));
+        assert_has(&e, &["contact.lagrange_regularisation", v, "0 <= r < 1"]);
+    }
+}

@@ -148,7 +148,7 @@ fn discs_2x2_biaxial_mu02() {
 
 /// Wall pressure (MPa) of wall `w` at solid ratio `phi`, interpolated linearly in a run's
 /// history of (solid ratio, pressures).
-fn pressure_at(hist: &PressureHistory, w: usize, phi: f64) -> f64 {
+fn pressure_at(hist: &[(f64, [f64; 4])], w: usize, phi: f64) -> f64 {
     let i = hist.iter().position(|h| h.0 >= phi).unwrap_or_else(|| panic!("the run did not reach solid ratio {phi}"));
     assert!(i > 0, "solid ratio {phi} before the first step");
     let (a, b) = (hist[i - 1], hist[i]);
@@ -157,23 +157,57 @@ fn pressure_at(hist: &PressureHistory, w: usize, phi: f64) -> f64 {
 }
 
 /// Lagrange multipliers on the biaxial job: the common checks (solid ratio 0.95, stabilisation,
-/// area, equal pressures on opposite walls), zero penetration, and the wall pressure at solid ratio 0.95 against the
-/// penalty job. The issue asks 2 %; measured 2.0 % (LM below penalty). The pressure rises in
-/// steps as contact spreads node by node on the 4 mm mesh, so this is held to 3 % as a
-/// regression guard, not as the issue's criterion.
+/// area, symmetry), a penetration of at most r λ / c (the perturbed Lagrangian, ~1e-7 mm here;
+/// held to 1e-5 mm), and the wall pressures at solid ratio 0.95 within 2 % of the penalty job
+/// (the issue's criterion; measured 0.01 %).
 #[test]
 fn discs_2x2_biaxial_lagrange() {
-    // the wall pressures are held to the symmetry tolerance; the displacements are not: the
-    // discs turn in a pinwheel (measured mirror mismatch 0.41 of the largest displacement,
-    // the four walls still equal) — a zero-energy mode of frictionless discs that the
-    // node-to-segment multipliers, one master segment per node, do not hold symmetric
-    let (last, lm) = check("discs_2x2_biaxial_lagrange.toml", &[0, 1, 2, 3], None);
-    assert!(last.max_penetration < 1e-9, "Lagrange multipliers leave a penetration of {} mm", last.max_penetration);
+    let (last, lm) = check("discs_2x2_biaxial_lagrange.toml", &[0, 1, 2, 3], Some(SYMMETRY_TOL_FREE_ROTATION));
+    assert!(last.max_penetration < 1e-5, "Lagrange multipliers leave a penetration of {} mm", last.max_penetration);
     let (_, _, _, pen) = run_job("discs_2x2_biaxial.toml");
+    compare("biaxial: Lagrange vs penalty", &lm, &pen, 0.02);
+}
+
+/// Largest relative difference of the four wall pressures of two runs at solid ratio 0.95
+/// (walls without load skipped), asserted below `tol`.
+fn compare(what: &str, a: &PressureHistory, b: &PressureHistory, tol: f64) {
     for w in 0..4 {
-        let (a, b) = (pressure_at(&lm, w, 0.95), pressure_at(&pen, w, 0.95));
-        let rel = (a - b) / b;
-        eprintln!("wall {w} at solid ratio 0.95: Lagrange {a:.3} MPa, penalty {b:.3} MPa ({:+.2} %)", 100.0 * rel);
-        assert!(rel.abs() < 0.03, "wall {w}: Lagrange {a} vs penalty {b} MPa");
+        let (pa, pb) = (pressure_at(a, w, 0.95), pressure_at(b, w, 0.95));
+        if pb.abs() < 1.0 {
+            continue;
+        }
+        let rel = (pa - pb) / pb;
+        eprintln!("{what}: wall {w} at solid ratio 0.95: {pa:.3} vs {pb:.3} MPa ({:+.3} %)", 100.0 * rel);
+        assert!(rel.abs() < tol, "{what}: wall {w}: {pa} vs {pb} MPa");
     }
+}
+
+/// The issue's "all three enforcement methods give wall pressures within 2 % of each other on
+/// the 2 × 2 job": the lateral job as shipped (penalty), with the augmented Lagrangian and with
+/// Lagrange multipliers. Measured at solid ratio 0.95: augmented Lagrangian = penalty to 1e-6
+/// (the penalty already meets the penetration tolerance, so no Uzawa update is needed),
+/// Lagrange +0.06 % (left/right) and +0.25 % (bottom/top).
+#[test]
+fn discs_2x2_lateral_three_methods_agree() {
+    let name = "discs_2x2_lateral.toml";
+    let run = |method: case::ContactMethod| -> PressureHistory {
+        let path = format!("jobs/compaction/{name}");
+        let mut c = case::load(std::path::Path::new(&path)).unwrap();
+        c.contact.method = method;
+        let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time.clone(), c.solver.clone()).unwrap();
+        let mut hist = Vec::new();
+        sim.run(&mut |_, r| {
+            if let Some(c) = &r.compaction {
+                hist.push((c.solid_ratio, c.pressure));
+            }
+        })
+        .unwrap_or_else(|e| panic!("{name} with {method:?}: {e}"));
+        hist
+    };
+    let pen = run(case::ContactMethod::Penalty);
+    let al = run(case::ContactMethod::AugmentedLagrangian);
+    let lm = run(case::ContactMethod::Lagrange);
+    compare("lateral: augmented Lagrangian vs penalty", &al, &pen, 0.02);
+    compare("lateral: Lagrange vs penalty", &lm, &pen, 0.02);
+    compare("lateral: Lagrange vs augmented Lagrangian", &lm, &al, 0.02);
 }

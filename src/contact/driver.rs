@@ -193,8 +193,15 @@ pub enum Candidate {
 /// pairs agree with the penalty within 1.5 % up to 0.85 but jam near 0.92 (seen again on
 /// 2026-11-22: the one-pass choice breaks the mirror symmetry, the frictionless apex-to-apex
 /// columns of discs then buckle and slide past each other, and an element inverts at 0.88).
-/// The biaxial job runs: `jobs/compaction/discs_2x2_biaxial_lagrange.toml` reaches 0.95 with
-/// a penetration of 1e-14 mm and the wall pressure 2.0 % below the penalty job's.
+/// With exact rows only the biaxial job ran (to 0.95, 2.0 % below the penalty pressure).
+///
+/// What fixed the 2 × 2 jobs (2026-11-22): with exact rows the symmetric tie-break cannot be
+/// used (two discs touching apex to apex give two pairs with opposite, dependent rows), so
+/// one arbitrary segment per node breaks the mirror symmetry, and the frictionless columns of
+/// discs — an unstable equilibrium — buckle and slide. With the perturbed Lagrangian
+/// (`contact.lagrange_regularisation` r, default 1e-4: active rows −A (g + r λ / c)) the
+/// dependent rows are harmless, the tie-break is used, and the lateral job runs to 0.95 within
+/// 0.3 % of the penalty pressures, with penetrations r λ / c ≈ 1e-7 mm.
 #[derive(Clone, Debug, Default)]
 pub struct Multipliers {
     pub candidates: Vec<Candidate>,
@@ -387,8 +394,10 @@ impl ContactProblem {
                 continue;
             }
             // closest segment; exact ties (node facing a master node) keep both segments, except
-            // for Lagrange multipliers, where two constraints on one node would be dependent
-            let tie = if self.spec.method == ContactMethod::Lagrange { -1.0 } else { TIE * self.h_of(self.slaves[si].1) };
+            // for exact Lagrange multipliers, where two nodes facing each other would give
+            // dependent rows (the regularised ones take them)
+            let exact_lm = self.spec.method == ContactMethod::Lagrange && self.spec.lagrange_regularisation <= 0.0;
+            let tie = if exact_lm { -1.0 } else { TIE * self.h_of(self.slaves[si].1) };
             match best.get_mut(&si) {
                 Some((db, segs)) if (d - *db).abs() <= tie => {
                     if segs.len() < 2 && !segs.contains(&seg) {
@@ -556,7 +565,11 @@ impl ContactProblem {
                 }
             }
             self.lm.scale[k] = c;
-            self.lm.rows[k] = if active { -c * area * gap } else { -area * lambda };
+            // perturbed Lagrangian: an active row is −A (g + r λ / c), which keeps the system
+            // regular where two candidates constrain the same gap (two-pass pairs of two nodes
+            // facing each other); it leaves a penetration r λ / c
+            let reg = self.spec.lagrange_regularisation;
+            self.lm.rows[k] = if active { -c * area * gap - reg * area * lambda } else { -area * lambda };
             if let Some((m, eq, n_free)) = kk.as_mut() {
                 let row = *n_free + k;
                 for (i, &d) in dofs.iter().enumerate() {
@@ -574,9 +587,10 @@ impl ContactProblem {
                         }
                     }
                 }
-                if !active {
+                let diagonal = if active { -reg * c * area } else { -c * area };
+                if diagonal != 0.0 {
                     if let Some(pos) = m.find(row, row) {
-                        m.values[pos] += -c * area;
+                        m.values[pos] += diagonal;
                     }
                 }
             }
