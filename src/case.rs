@@ -115,6 +115,18 @@ pub enum WallSide {
     Top,
 }
 
+impl WallSide {
+    /// Position of the side in the history's wall columns: left 0, right 1, bottom 2, top 3.
+    pub fn index(self) -> usize {
+        match self {
+            WallSide::Left => 0,
+            WallSide::Right => 1,
+            WallSide::Bottom => 2,
+            WallSide::Top => 3,
+        }
+    }
+}
+
 /// A rigid straight wall: `position` (x of a left/right wall, y of a bottom/top wall, mm, at
 /// t = 0) moving towards the particles at `velocity` (mm/s, positive inward).
 #[derive(Clone, Debug, PartialEq)]

@@ -25,6 +25,7 @@ pub mod case;
 pub mod contact;
 pub mod dynamics;
 pub mod element;
+pub mod fits;
 pub mod linalg;
 pub mod material;
 pub mod mesh;

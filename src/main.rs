@@ -331,12 +331,26 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     let mut phi0: Option<f64> = None;
     let mut max_body_volume_error = 0.0f64;
     let mut history_s = 0.0;
+    // the pressure–density curve for the compaction-law fits: the mean pressure of the moving
+    // walls (of every loaded wall when none moves)
+    let pressing: Vec<usize> = sim.model.walls.iter().filter(|w| w.velocity != 0.0).map(|w| w.side.index()).collect();
+    let mut curve: Vec<mpfem::fits::CurvePoint> = Vec::new();
     let mut io_error: Option<std::io::Error> = None;
     let mut results_error: Option<mpfem::results::ResultsError> = None;
     let mut last_report: Option<mpfem::solver::StepReport> = None;
     let result = sim.run(&mut |s, r| {
         last_report = Some(r.clone());
         max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
+        if let Some(c) = &r.compaction {
+            let loaded: Vec<f64> = if pressing.is_empty() {
+                c.pressure.iter().copied().filter(|p| *p > 0.0).collect()
+            } else {
+                pressing.iter().map(|&k| c.pressure[k]).collect()
+            };
+            if !loaded.is_empty() && c.solid_ratio > 0.0 {
+                curve.push(mpfem::fits::CurvePoint { solid_ratio: c.solid_ratio, pressure: loaded.iter().sum::<f64>() / loaded.len() as f64 });
+            }
+        }
         let t_out = Instant::now();
         if let Err(e) = history.write(r) {
             io_error.get_or_insert(e);
@@ -408,6 +422,11 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         wall_time_s,
         final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
         phases: Phases::split(t, output_s, wall_time_s),
+        fits: sim.initial_solid_ratio().filter(|_| !curve.is_empty()).map(|d0| {
+            let names = ["left", "right", "bottom", "top"];
+            let of = if pressing.is_empty() { "every loaded wall".to_string() } else { pressing.iter().map(|&k| names[k]).collect::<Vec<_>>().join(", ") };
+            mpfem::fits::fit(&curve, d0, of)
+        }),
         run: summary,
         last_step,
     };

@@ -218,6 +218,8 @@ pub struct SummaryFile<'a> {
     #[serde(rename = "final")]
     pub final_state: Option<FinalState>,
     pub phases: Phases,
+    /// Heckel and Kawakita fits of the pressure–density curve (compaction runs).
+    pub fits: Option<crate::fits::CompactionFits>,
     pub run: Option<&'a RunSummary>,
     pub last_step: Option<&'a StepReport>,
 }

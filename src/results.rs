@@ -246,7 +246,7 @@ impl ResultsWriter {
         let contact = sim.nodal_contact().filter(|c| c.pressure.len() == n_nodes).map(|c| {
             let mut wall_force = vec![0.0; 4 * n_nodes];
             for (w, f) in model.walls.iter().zip(&c.wall_force) {
-                let side = side_index(w.side);
+                let side = w.side.index();
                 for (n, v) in f.iter().enumerate() {
                     wall_force[4 * n + side] += v;
                 }
@@ -326,7 +326,7 @@ impl ResultsWriter {
                     wall_points.extend([lo, p, hi, p]);
                 }
             }
-            wall_ids.push(side_index(w.side) as i32);
+            wall_ids.push(w.side.index() as i32);
         }
         let wall_cells: Vec<i64> = (0..2 * walls.len() as i64).collect();
 
@@ -478,16 +478,6 @@ const XDMF_HEAD: &str = "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.
 /// An XDMF data item pointing into the HDF5 file.
 fn item(h5: &str, dims: String, ty: &str, prec: u8, path: &str) -> String {
     format!("<DataItem Dimensions=\"{dims}\" NumberType=\"{ty}\" Precision=\"{prec}\" Format=\"HDF\">{h5}:{path}</DataItem>")
-}
-
-/// Index of a wall side in the `wall_force` columns and `wall_id`: left, right, bottom, top.
-fn side_index(side: WallSide) -> usize {
-    match side {
-        WallSide::Left => 0,
-        WallSide::Right => 1,
-        WallSide::Bottom => 2,
-        WallSide::Top => 3,
-    }
 }
 
 /// The XDMF grid of the particles at one output step (HDF5 group `g`), with the contact node

@@ -16,7 +16,7 @@
 //!    discarded and it is retried with Δt · cutback, down to `dt_min`.
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
-use crate::case::{StabilisationKind, Stabilise, WallSide};
+use crate::case::{StabilisationKind, Stabilise};
 use crate::contact::driver::{wall_position, ContactProblem, ContactStats};
 use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
 use crate::dynamics::Dynamics;
@@ -379,6 +379,14 @@ impl Simulation {
         self.sol.u.iter().zip(&self.u_prev).map(|(a, b)| (a - b) / self.dt_prev).collect()
     }
 
+    /// Solid ratio of the initial configuration (particle area / die area at t = 0), when four
+    /// walls close a die.
+    pub fn initial_solid_ratio(&self) -> Option<f64> {
+        let [x0, x1, y0, y1] = self.contact.as_ref()?.die(0.0)?;
+        let die = (x1 - x0) * (y1 - y0);
+        (die > 0.0).then(|| self.area0_total / die)
+    }
+
     /// Contact state per node of the last committed step (None without contact).
     pub fn nodal_contact(&self) -> Option<&crate::contact::driver::NodalContact> {
         self.contact.as_ref().map(|c| &c.nodal)
@@ -450,12 +458,7 @@ impl Simulation {
     fn is_jammed(&self, last: Option<&StepReport>) -> bool {
         let Some(c) = last.and_then(|r| r.compaction.as_ref()) else { return false };
         let moving_loaded = self.model.walls.iter().all(|w| {
-            let k = match w.side {
-                WallSide::Left => 0,
-                WallSide::Right => 1,
-                WallSide::Bottom => 2,
-                WallSide::Top => 3,
-            };
+            let k = w.side.index();
             w.velocity == 0.0 || c.force[k] > 0.0
         });
         !self.model.walls.is_empty() && c.solid_ratio >= 0.9 && moving_loaded
@@ -959,12 +962,7 @@ impl Simulation {
                 let moved = (wall_position(spec, t) - wall_position(spec, t - dt)).abs();
                 self.work_ext += 0.5 * (f + self.last_wall_force[w]) * moved;
                 self.last_wall_force[w] = f;
-                let k = match spec.side {
-                    WallSide::Left => 0,
-                    WallSide::Right => 1,
-                    WallSide::Bottom => 2,
-                    WallSide::Top => 3,
-                };
+                let k = spec.side.index();
                 let len = c.wall_length(w, t, &x);
                 out.force[k] += f;
                 out.pressure[k] += if len > 0.0 { f / len } else { 0.0 };

@@ -210,6 +210,21 @@ fn check_summary(out: &Path, case: &Path) {
     let vcol = header.iter().position(|c| *c == "volume_error_max_body").unwrap();
     let hist_max = text.lines().skip(1).map(|l| l.split(',').nth(vcol).unwrap().parse::<f64>().unwrap()).fold(0.0, f64::max);
     assert!(close(vmax, hist_max), "max particle volume error {vmax} vs history {hist_max}");
+    // compaction-law fits: the pressing walls, the initial solid ratio below the first step's,
+    // and a Heckel fit (3 points above 10 % of the largest pressure in this short run) whose
+    // line reproduces the history's last point within its R²
+    let fits = &s["fits"];
+    assert_eq!(fits["pressure_of"], "left, right");
+    let d0 = fits["initial_solid_ratio"].as_f64().unwrap();
+    let phi_col = header.iter().position(|c| *c == "solid_ratio").unwrap();
+    let phi1: f64 = text.lines().nth(1).unwrap().split(',').nth(phi_col).unwrap().parse().unwrap();
+    assert!(d0 > 0.6 && d0 < phi1, "initial solid ratio {d0}, first step {phi1}");
+    let h = &fits["heckel"];
+    let (k, a, r2) = (h["k"].as_f64().unwrap(), h["a"].as_f64().unwrap(), h["r2"].as_f64().unwrap());
+    assert!(h["points"].as_u64().unwrap() >= 3 && (0.0..=1.0).contains(&r2) && k > 0.0, "{h}");
+    let p_last = 0.5 * (col("p_left") + col("p_right"));
+    let heckel_last = (1.0 / (1.0 - col("solid_ratio"))).ln();
+    assert!(((k * p_last + a) - heckel_last).abs() < 0.05 * heckel_last, "Heckel line {} vs {heckel_last}", k * p_last + a);
     let p = &s["phases"];
     let total = p["total"].as_f64().unwrap();
     let sum: f64 = ["contact_search", "contact_assembly", "element_assembly", "linear_solve", "output", "other"].iter().map(|k| p[k].as_f64().unwrap()).sum();
