@@ -18,6 +18,7 @@
 //! file and what was wrong.
 
 use plotters::coord::Shift;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -526,6 +527,8 @@ pub fn colour_map(t: f64) -> (u8, u8, u8) {
 pub struct PressureRun<'a> {
     pub label: &'a str,
     pub history: &'a History,
+    /// A line of text under the curves (the compaction-law fits), if any.
+    pub note: Option<String>,
 }
 
 fn draw_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> PlotError + '_ {
@@ -543,15 +546,20 @@ pub fn pressure_plot(runs: &[PressureRun], png: &Path, svg: &Path) -> Result<usi
     if series.is_empty() {
         return Ok(0);
     }
+    let overlay = runs.len() > 1;
+    let notes: Vec<String> = runs
+        .iter()
+        .filter_map(|r| r.note.as_ref().map(|n| if overlay { format!("{}: {n}", r.label) } else { n.clone() }))
+        .collect();
     ensure_font()?;
     {
         let root = BitMapBackend::new(png, PRESSURE_SIZE).into_drawing_area();
-        draw_pressure(&root, &series).map_err(draw_err(png))?;
+        draw_pressure(&root, &series, &notes).map_err(draw_err(png))?;
         root.present().map_err(draw_err(png))?;
     }
     {
         let root = SVGBackend::new(svg, PRESSURE_SIZE).into_drawing_area();
-        draw_pressure(&root, &series).map_err(draw_err(svg))?;
+        draw_pressure(&root, &series, &notes).map_err(draw_err(svg))?;
         root.present().map_err(draw_err(svg))?;
     }
     tracing::info!(png = %png.display(), svg = %svg.display(), series = series.len(), "plot: pressure");
@@ -619,6 +627,7 @@ fn padded(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
 fn draw_pressure<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     series: &[Series],
+    notes: &[String],
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
     let all = series.iter().flat_map(|s| s.points.iter());
@@ -635,6 +644,7 @@ fn draw_pressure<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(root)
         .caption("Wall pressure against solid ratio", ("sans-serif", 24))
         .margin(20)
+        .margin_bottom(20 + 20 * notes.len() as u32)
         .x_label_area_size(55)
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)?;
@@ -671,6 +681,16 @@ fn draw_pressure<DB: DrawingBackend>(
             let p = s.points[i];
             EmptyElement::at(p) + marker((0, 0), wall, size, fill)
         }))?;
+    }
+    // the fits, one line per run, under the x axis label
+    let (xs, _) = chart.plotting_area().get_pixel_range();
+    let bottom = root.dim_in_pixel().1 as i32;
+    let style = ("sans-serif", 14)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Right, VPos::Bottom));
+    for (i, n) in notes.iter().rev().enumerate() {
+        root.draw(&Text::new(n.clone(), (xs.end, bottom - 12 - 20 * i as i32), style.clone()))?;
     }
     chart
         .configure_series_labels()
@@ -930,6 +950,22 @@ pub fn remove_old_plots(dir: &Path) -> usize {
 }
 
 /// The case title recorded in `DIR/summary.json`, if any.
+/// The compaction-law fits of a run as one line of text, from its `summary.json`.
+fn fits_note(dir: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let f = v.get("fits")?;
+    let num = |x: &serde_json::Value, k: &str| x.get(k).and_then(|v| v.as_f64());
+    let mut parts = Vec::new();
+    if let Some(h) = f.get("heckel").filter(|h| !h.is_null()) {
+        parts.push(format!("Heckel K = {:.3e} /MPa, A = {:.3}, R² = {:.3}", num(h, "k")?, num(h, "a")?, num(h, "r2")?));
+    }
+    if let Some(k) = f.get("kawakita").filter(|k| !k.is_null()) {
+        parts.push(format!("Kawakita a = {:.3}, b = {:.3e} /MPa, R² = {:.3}", num(k, "a")?, num(k, "b")?, num(k, "r2")?));
+    }
+    (!parts.is_empty()).then(|| parts.join("; "))
+}
+
 fn run_title(dir: &Path) -> Option<String> {
     let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
@@ -1007,6 +1043,7 @@ pub fn plot_results(req: &PlotRequest) -> Result<PlotReport, PlotError> {
         .map(|(r, h)| PressureRun {
             label: &r.label,
             history: h,
+            note: fits_note(&r.dir),
         })
         .collect();
     let stem = if runs.len() > 1 {

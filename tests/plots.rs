@@ -211,6 +211,11 @@ fn run_draws_the_pressure_plot_and_snapshots_by_default() {
     ] {
         assert!(texts.iter().any(|x| x == t), "no text `{t}` in {texts:?}");
     }
+    // the Heckel fit of summary.json, printed under the plot with its slope
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let k = summary["fits"]["heckel"]["k"].as_f64().expect("a Heckel fit in summary.json");
+    let fit_line = texts.iter().find(|x| x.starts_with("Heckel K = ")).unwrap_or_else(|| panic!("no Heckel line in {texts:?}"));
+    assert!(fit_line.contains(&format!("{k:.3e}")), "{fit_line} vs K = {k}");
 
     // snapshots: output steps 2, 4, 6 and the last step (7): all four drawn
     let steps = {
