@@ -87,7 +87,19 @@ enum Command {
     },
 }
 
+/// Rust ignores SIGPIPE, so printing into a closed pipe (`mpfem check CASE | head -1`) would
+/// panic; restore the default: the process ends quietly, as other command-line tools do.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default at start-up, before any thread
+    // exists, has no preconditions
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    restore_sigpipe();
     let cli = Cli::parse();
     let level = match cli.verbose {
         0 => "warn",
