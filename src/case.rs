@@ -35,6 +35,19 @@ pub const MAX_DIVISIONS: i64 = 100_000;
 /// Default density, t/mm³.
 pub const DEFAULT_DENSITY: f64 = 1e-9;
 
+/// Largest `count` of a `[[packings]]` entry (the cells are built in O(count²)).
+pub const MAX_PACKING_COUNT: usize = 5000;
+
+/// Default Lloyd relaxation steps of a `[[packings]]` entry.
+pub const DEFAULT_LLOYD: usize = 10;
+
+/// The die `[x0, x1, y0, y1]` (mm) closed by a left, a right, a bottom and a top wall at their
+/// initial positions; `None` unless all four are present.
+pub fn die_of(walls: &[WallSpec]) -> Option<[f64; 4]> {
+    let pos = |side: WallSide| walls.iter().find(|w| w.side == side).map(|w| w.position);
+    Some([pos(WallSide::Left)?, pos(WallSide::Right)?, pos(WallSide::Bottom)?, pos(WallSide::Top)?])
+}
+
 
 // ---------------------------------------------------------------------------------------------
 // Error
@@ -257,6 +270,58 @@ pub struct BodySpec {
     pub divisions: Option<[usize; 2]>,
 }
 
+impl BodySpec {
+    /// The body as a `[[bodies]]` table of the case file (material by name), such that
+    /// parsing it gives this body back.
+    pub fn to_toml(&self, materials: &[MaterialSpec]) -> toml::Table {
+        let mut t = toml::Table::new();
+        t.insert("name".into(), self.name.clone().into());
+        let material = materials.get(self.material).map_or_else(String::new, |m| m.name.clone());
+        t.insert("material".into(), material.into());
+        t.insert("mesh_size".into(), self.mesh_size.into());
+        if let Some([a, b]) = self.divisions {
+            t.insert("divisions".into(), toml::Value::Array(vec![(a as i64).into(), (b as i64).into()]));
+        }
+        t.insert("shape".into(), toml::Value::Table(self.shape.to_toml()));
+        t
+    }
+}
+
+impl ShapeSpec {
+    /// The `shape = { type = ..., ... }` table of the case file.
+    pub fn to_toml(&self) -> toml::Table {
+        let pair = |p: [f64; 2]| toml::Value::Array(vec![p[0].into(), p[1].into()]);
+        let mut t = toml::Table::new();
+        t.insert("type".into(), self.type_name().into());
+        match self {
+            ShapeSpec::Rectangle { origin, size } => {
+                t.insert("origin".into(), pair(*origin));
+                t.insert("size".into(), pair(*size));
+            }
+            ShapeSpec::Disc { center, radius } => {
+                t.insert("center".into(), pair(*center));
+                t.insert("radius".into(), (*radius).into());
+            }
+            ShapeSpec::Ellipse { center, semi_axes, angle_deg } => {
+                t.insert("center".into(), pair(*center));
+                t.insert("semi_axes".into(), pair(*semi_axes));
+                t.insert("angle".into(), (*angle_deg).into());
+            }
+            ShapeSpec::Polygon { vertices } => {
+                t.insert("vertices".into(), toml::Value::Array(vertices.iter().map(|v| pair(*v)).collect()));
+            }
+            ShapeSpec::Cook => {}
+            ShapeSpec::AnnulusSector { center, inner_radius, outer_radius, angles_deg } => {
+                t.insert("center".into(), pair(*center));
+                t.insert("inner_radius".into(), (*inner_radius).into());
+                t.insert("outer_radius".into(), (*outer_radius).into());
+                t.insert("angles".into(), pair(*angles_deg));
+            }
+        }
+        t
+    }
+}
+
 /// Geometry of a body (mm, degrees).
 #[derive(Debug, Clone, PartialEq)]
 pub enum ShapeSpec {
@@ -314,6 +379,20 @@ impl ShapeSpec {
             }
         };
         names.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// The convex outline used by the overlap check; `None` for an annulus sector (not
+    /// convex, not checked). A polygon stands for the convex hull of its vertices.
+    pub fn convex(&self) -> Option<crate::packing::overlap::Convex> {
+        use crate::packing::overlap::Convex;
+        Some(match self {
+            ShapeSpec::Disc { center, radius } => Convex::Disc { center: *center, radius: *radius },
+            ShapeSpec::Ellipse { center, semi_axes, angle_deg } => Convex::Ellipse { center: *center, semi_axes: *semi_axes, angle_deg: *angle_deg },
+            ShapeSpec::Polygon { vertices } => Convex::Polygon(vertices.clone()),
+            ShapeSpec::Rectangle { origin: o, size: s } => Convex::Polygon(vec![*o, [o[0] + s[0], o[1]], [o[0] + s[0], o[1] + s[1]], [o[0], o[1] + s[1]]]),
+            ShapeSpec::Cook => Convex::Polygon(vec![[0.0, 0.0], [48.0, 44.0], [48.0, 60.0], [0.0, 44.0]]),
+            ShapeSpec::AnnulusSector { .. } => return None,
+        })
     }
 
     /// Centre for radial displacements (disc, ellipse, annulus sector); `None` otherwise.
@@ -671,7 +750,32 @@ mod raw {
         pub walls: Option<Vec<WallRaw>>,
         pub contact: Option<ContactRaw>,
         pub grids: Option<Vec<GridRaw>>,
+        pub packings: Option<Vec<PackingRaw>>,
         pub stop: Option<StopRaw>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct PackingRaw {
+        pub kind: Option<String>,
+        pub count: Option<i64>,
+        pub seed: Option<i64>,
+        pub solid_ratio: Option<f64>,
+        pub material: Option<String>,
+        pub materials: Option<Vec<String>>,
+        pub fractions: Option<Vec<f64>>,
+        pub sizes: Option<SizesRaw>,
+        pub lloyd: Option<i64>,
+        pub aspect: Option<f64>,
+        pub mesh_size: Option<f64>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct SizesRaw {
+        pub distribution: Option<String>,
+        pub ratio: Option<f64>,
+        pub sigma: Option<f64>,
     }
 
     #[derive(Deserialize)]
@@ -709,6 +813,11 @@ mod raw {
         pub ny: Option<i64>,
         pub shape: Option<String>,
         pub sides: Option<i64>,
+        pub arrangement: Option<String>,
+        pub materials: Option<Vec<String>>,
+        pub fractions: Option<Vec<f64>>,
+        pub pattern: Option<String>,
+        pub seed: Option<i64>,
         pub solid_ratio: Option<f64>,
         pub mesh_size: Option<f64>,
     }
@@ -741,6 +850,19 @@ mod raw {
         }
         pub fn polygon(vertices: Vec<[f64; 2]>) -> Self {
             Self { vertices: Some(vertices.into_iter().map(Pair).collect()), ..Self::empty("polygon") }
+        }
+        pub fn from_convex(c: crate::packing::overlap::Convex) -> Self {
+            use crate::packing::overlap::Convex;
+            match c {
+                Convex::Disc { center, radius } => Self::disc(center, radius),
+                Convex::Polygon(v) => Self::polygon(v),
+                Convex::Ellipse { center, semi_axes, angle_deg } => Self {
+                    center: Some(Pair(center)),
+                    semi_axes: Some(Pair(semi_axes)),
+                    angle: Some(angle_deg),
+                    ..Self::empty("ellipse")
+                },
+            }
         }
     }
 
@@ -1197,7 +1319,10 @@ impl Cx<'_> {
         };
         let mut raw_bodies = r.bodies.unwrap_or_default();
         for (i, g) in r.grids.unwrap_or_default().into_iter().enumerate() {
-            raw_bodies.extend(self.grid(&format!("grids[{i}]"), g, &walls)?);
+            raw_bodies.extend(self.grid(&format!("grids[{i}]"), g, &walls, &materials)?);
+        }
+        for (i, p) in r.packings.unwrap_or_default().into_iter().enumerate() {
+            raw_bodies.extend(self.packing(&format!("packings[{i}]"), i, p, &walls, &materials)?);
         }
         if raw_bodies.is_empty() {
             return Err(self.err(
@@ -1220,6 +1345,7 @@ impl Cx<'_> {
             }
             bodies.push(spec);
         }
+        self.check_overlaps(&bodies)?;
 
         let mut boundary = Vec::new();
         for (i, b) in r.boundary.unwrap_or_default().into_iter().enumerate() {
@@ -1998,16 +2124,172 @@ impl Cx<'_> {
         Ok(spec)
     }
 
-    /// Expand a `[[grids]]` entry into raw bodies named `g{i}_p{k}` inside the die of the walls.
-    fn grid(&self, key: &str, g: raw::GridRaw, walls: &[WallSpec]) -> Result<Vec<raw::Body>, CaseError> {
-        let pos = |side: WallSide| walls.iter().find(|w| w.side == side).map(|w| w.position);
-        let (Some(x0), Some(x1), Some(y0), Some(y1)) = (pos(WallSide::Left), pos(WallSide::Right), pos(WallSide::Bottom), pos(WallSide::Top)) else {
-            return Err(self.err(key, "a particle grid fills the die, which needs all four [[walls]] (left, right, bottom, top)"));
+    /// Particles (bodies) must not overlap: the first overlapping pair is an error at the
+    /// later body, naming both (see [`crate::packing::overlap`]; touching is allowed, annulus
+    /// sectors are not checked).
+    fn check_overlaps(&self, bodies: &[BodySpec]) -> Result<(), CaseError> {
+        if bodies.len() < 2 {
+            return Ok(());
+        }
+        let shapes: Vec<_> = bodies.iter().map(|b| b.shape.convex()).collect();
+        let Some(o) = crate::packing::overlap::overlapping_pairs(&shapes, 1e-9).into_iter().next() else {
+            return Ok(());
         };
+        let (a, b) = (&bodies[o.first], &bodies[o.second]);
+        let depth = if o.depth.is_finite() { format!(" by {:.4} mm", o.depth) } else { String::new() };
+        Err(self.err(
+            &format!("bodies[{}]", o.second),
+            format!(
+                "body \"{}\" ({}) overlaps body \"{}\" (bodies[{}], {}){depth}; expected particles that do not overlap (touching is allowed): move or shrink one of them",
+                b.name,
+                b.shape.type_name(),
+                a.name,
+                o.first,
+                a.shape.type_name()
+            ),
+        ))
+    }
+
+    /// The die `[x0, x1, y0, y1]` closed by the four walls, for the generator at `key`.
+    fn die(&self, key: &str, what: &str, walls: &[WallSpec]) -> Result<[f64; 4], CaseError> {
+        let [x0, x1, y0, y1] = die_of(walls).ok_or_else(|| self.err(key, format!("a {what} fills the die, which needs all four [[walls]] (left, right, bottom, top)")))?;
         if !(x1 > x0 && y1 > y0) {
             return Err(self.err("walls", format!("the die [{x0}, {x1}] x [{y0}, {y1}] mm is empty; expected left < right and bottom < top")));
         }
-        let material = self.req(g.material, &format!("{key}.material"), "the name of a material")?;
+        Ok([x0, x1, y0, y1])
+    }
+
+    /// The materials of a generator: `material = "a"` or `materials = ["a", "b"]`, each a known
+    /// material; `(name, key)` pairs.
+    fn material_list(&self, key: &str, material: Option<String>, list: Option<Vec<String>>, materials: &[MaterialSpec]) -> Result<Vec<(String, String)>, CaseError> {
+        let k = |field: &str| format!("{key}.{field}");
+        let names: Vec<(String, String)> = match (material, list) {
+            (Some(m), None) => vec![(m, k("material"))],
+            (None, Some(ms)) if !ms.is_empty() => ms.into_iter().enumerate().map(|(i, m)| (m, format!("{key}.materials[{i}]"))).collect(),
+            (None, Some(_)) => return Err(self.err(&k("materials"), "empty list; expected at least one material name")),
+            (Some(_), Some(_)) => return Err(self.err(&k("materials"), "given together with material; expected material = \"name\" or materials = [\"a\", \"b\", ...], not both")),
+            (None, None) => return Err(self.missing(&k("material"), "material = \"name\" or materials = [\"a\", \"b\", ...] (with fractions)")),
+        };
+        for (name, nkey) in &names {
+            if !materials.iter().any(|m| &m.name == name) {
+                return Err(self.err(nkey, format!("value \"{name}\": no material named \"{name}\" (known: {})", join_names(materials.iter().map(|m| m.name.as_str())))));
+            }
+        }
+        Ok(names)
+    }
+
+    /// `fractions` of a generator with `n` materials (default: equal shares).
+    fn fractions(&self, key: &str, fractions: Option<Vec<f64>>, n: usize) -> Result<Vec<f64>, CaseError> {
+        let Some(f) = fractions else { return Ok(vec![1.0; n]) };
+        if f.len() != n {
+            return Err(self.err(&format!("{key}.fractions"), format!("{} value(s) for {n} material(s); expected one fraction per material", f.len())));
+        }
+        for (i, v) in f.iter().enumerate() {
+            self.positive(&format!("{key}.fractions[{i}]"), *v, "a fraction (relative share of the particles)")?;
+        }
+        Ok(f)
+    }
+
+    /// Expand a `[[packings]]` entry into raw bodies named `r{i}_p{k}` inside the die.
+    fn packing(&self, key: &str, index: usize, p: raw::PackingRaw, walls: &[WallSpec], materials: &[MaterialSpec]) -> Result<Vec<raw::Body>, CaseError> {
+        use crate::packing::random::{self, RandomSpec, Sizes};
+        let k = |field: &str| format!("{key}.{field}");
+        let [x0, x1, y0, y1] = self.die(key, "random packing", walls)?;
+        let kind = self.req(p.kind, &k("kind"), "\"voronoi_polygons\", \"voronoi_ellipses\" or \"discs\"")?;
+        let kind = self.choice(&k("kind"), &kind, &["voronoi_polygons", "voronoi_ellipses", "discs"])?;
+        let aspect = match p.aspect {
+            None => 1.0,
+            Some(_) if kind == "discs" => return Err(self.err(&k("aspect"), "not a parameter of kind \"discs\"; expected only with voronoi_polygons or voronoi_ellipses")),
+            Some(v) => self.num(&k("aspect"), v, (0.1..=10.0).contains(&v), "an elongation of the cells along x in [0.1, 10] (1 = roundish)")?,
+        };
+        let count = self.count(&k("count"), self.req(p.count, &k("count"), "the number of particles (>= 1)")?, 1)?;
+        if count > MAX_PACKING_COUNT {
+            return Err(self.err(&k("count"), format!("value {count}; expected at most {MAX_PACKING_COUNT} particles")));
+        }
+        let seed = match p.seed {
+            None => 0,
+            Some(v) => self.count(&k("seed"), v, 0)? as u64,
+        };
+        let phi = self.req(p.solid_ratio, &k("solid_ratio"), "the initial solid ratio in (0, 1)")?;
+        let phi = self.num(&k("solid_ratio"), phi, phi > 0.0 && phi < 1.0, "a solid ratio in (0, 1)")?;
+        let h = self.positive(&k("mesh_size"), self.req(p.mesh_size, &k("mesh_size"), "an element size in mm")?, "an element size in mm")?;
+        let lloyd = match p.lloyd {
+            None => DEFAULT_LLOYD,
+            Some(v) => {
+                let n = self.count(&k("lloyd"), v, 0)?;
+                if n > 1000 {
+                    return Err(self.err(&k("lloyd"), format!("value {n}; expected at most 1000 relaxation steps")));
+                }
+                n
+            }
+        };
+        let names = self.material_list(key, p.material, p.materials, materials)?;
+        let fractions = self.fractions(key, p.fractions, names.len())?;
+        let sizes = match p.sizes {
+            None => Sizes::Equal,
+            Some(sz) => {
+                let dkey = k("sizes.distribution");
+                let dist = self.req(sz.distribution, &dkey, "\"equal\", \"uniform\" or \"lognormal\"")?;
+                let dist = self.choice(&dkey, &dist, &["equal", "uniform", "lognormal"])?;
+                let ratio = |cx: &Self| -> Result<f64, CaseError> {
+                    let rkey = k("sizes.ratio");
+                    let r = cx.req(sz.ratio, &rkey, "the largest / smallest radius ratio (> 1)")?;
+                    cx.num(&rkey, r, r > 1.0 && r <= 100.0, "a largest / smallest radius ratio in (1, 100]")
+                };
+                match dist {
+                    "equal" => {
+                        for (name, is) in [("ratio", sz.ratio.is_some()), ("sigma", sz.sigma.is_some())] {
+                            if is {
+                                return Err(self.err(&k(&format!("sizes.{name}")), "not a parameter of distribution \"equal\"; expected only with \"uniform\" (ratio) or \"lognormal\" (sigma, ratio)"));
+                            }
+                        }
+                        Sizes::Equal
+                    }
+                    "uniform" => {
+                        if sz.sigma.is_some() {
+                            return Err(self.err(&k("sizes.sigma"), "not a parameter of distribution \"uniform\"; expected only ratio"));
+                        }
+                        Sizes::Uniform { ratio: ratio(self)? }
+                    }
+                    _ => {
+                        let skey = k("sizes.sigma");
+                        let sigma = self.req(sz.sigma, &skey, "the standard deviation of ln(radius) (> 0)")?;
+                        let sigma = self.num(&skey, sigma, sigma > 0.0 && sigma <= 2.0, "a standard deviation of ln(radius) in (0, 2]")?;
+                        Sizes::LogNormal { sigma, ratio: ratio(self)? }
+                    }
+                }
+            }
+        };
+        let spec = RandomSpec { count, seed, solid_ratio: phi, sizes, lloyd, aspect, fractions };
+        let die = random::Die { x: [x0, x1], y: [y0, y1] };
+        let packing = match kind {
+            "voronoi_polygons" => random::voronoi_polygons(die, &spec),
+            "voronoi_ellipses" => random::voronoi_ellipses(die, &spec),
+            _ => random::random_discs(die, &spec),
+        }
+        .map_err(|e| {
+            let at = match e.param {
+                "die" => "walls".to_string(),
+                "count" | "solid_ratio" | "sizes" | "fractions" | "aspect" => k(e.param),
+                _ => key.to_string(),
+            };
+            self.err(&at, e.message)
+        })?;
+        Ok(packing
+            .particles
+            .into_iter()
+            .enumerate()
+            .map(|(j, part)| {
+                let material = names[part.material].0.clone();
+                raw::Body::generated(format!("r{index}_p{j}"), material, h, raw::Shape::from_convex(part.shape))
+            })
+            .collect())
+    }
+
+    /// Expand a `[[grids]]` entry into raw bodies named `g{i}_p{k}` inside the die of the walls.
+    fn grid(&self, key: &str, g: raw::GridRaw, walls: &[WallSpec], materials: &[MaterialSpec]) -> Result<Vec<raw::Body>, CaseError> {
+        let [x0, x1, y0, y1] = self.die(key, "particle grid", walls)?;
+        let names = self.material_list(key, g.material, g.materials, materials)?;
         let nx = self.count(&format!("{key}.nx"), self.req(g.nx, &format!("{key}.nx"), "particles along x (>= 1)")?, 1)?;
         let ny = self.count(&format!("{key}.ny"), self.req(g.ny, &format!("{key}.ny"), "particles along y (>= 1)")?, 1)?;
         let shape = g.shape.unwrap_or_else(|| "disc".into());
@@ -2019,9 +2301,51 @@ impl Cx<'_> {
         let phi = self.req(g.solid_ratio, &format!("{key}.solid_ratio"), "the initial solid ratio in (0, 1)")?;
         let phi = self.num(&format!("{key}.solid_ratio"), phi, phi > 0.0 && phi < 1.0, "a solid ratio in (0, 1)")?;
         let h = self.positive(&format!("{key}.mesh_size"), self.req(g.mesh_size, &format!("{key}.mesh_size"), "an element size in mm")?, "an element size in mm")?;
+        let arrangement = match g.arrangement.as_deref() {
+            None => crate::packing::Arrangement::Square,
+            Some(a) => match self.choice(&format!("{key}.arrangement"), a, &["square", "hexagonal"])? {
+                "hexagonal" => {
+                    if nx < 2 {
+                        return Err(self.err(&format!("{key}.nx"), format!("value {nx}; a hexagonal grid needs nx >= 2 (its odd rows hold nx - 1 particles)")));
+                    }
+                    crate::packing::Arrangement::Hexagonal
+                }
+                _ => crate::packing::Arrangement::Square,
+            },
+        };
+        let cells = crate::packing::grid_cells(nx, ny, arrangement);
+        let assigned: Vec<usize> = match g.pattern {
+            Some(pat) => {
+                let pkey = format!("{key}.pattern");
+                let pat = self.choice(&pkey, &pat, &["checkerboard", "rows", "columns"])?;
+                for (field, given) in [("fractions", g.fractions.is_some()), ("seed", g.seed.is_some())] {
+                    if given {
+                        return Err(self.err(&format!("{key}.{field}"), "not allowed with pattern; expected either a pattern or fractions (with a seed)"));
+                    }
+                }
+                let m = names.len();
+                cells
+                    .iter()
+                    .map(|&(i, j)| match pat {
+                        "checkerboard" => (i + j) % m,
+                        "rows" => j % m,
+                        _ => i % m,
+                    })
+                    .collect()
+            }
+            None => {
+                let fractions = self.fractions(key, g.fractions, names.len())?;
+                let seed = match g.seed {
+                    None => 0,
+                    Some(v) => self.count(&format!("{key}.seed"), v, 0)? as u64,
+                };
+                crate::packing::random::mixture(seed, cells.len(), &fractions)
+            }
+        };
+        let material = |k: usize| names[assigned.get(k).copied().unwrap_or(0)].0.clone();
         let ix = key.trim_start_matches("grids[").trim_end_matches(']');
         if sides == usize::MAX {
-            let places = crate::packing::regular_grid_ellipses(nx, ny, x1 - x0, y1 - y0, phi).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
+            let places = crate::packing::arranged_grid_ellipses(nx, ny, x1 - x0, y1 - y0, phi, arrangement).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
             return Ok(places
                 .iter()
                 .enumerate()
@@ -2031,11 +2355,11 @@ impl Cx<'_> {
                     shape.radius = None;
                     shape.semi_axes = Some(raw::Pair(*ab));
                     shape.angle = Some(0.0);
-                    raw::Body::generated(format!("g{ix}_p{k}"), material.clone(), h, shape)
+                    raw::Body::generated(format!("g{ix}_p{k}"), material(k), h, shape)
                 })
                 .collect());
         }
-        let places = crate::packing::regular_grid(nx, ny, x1 - x0, y1 - y0, phi, sides).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
+        let places = crate::packing::arranged_grid(nx, ny, x1 - x0, y1 - y0, phi, sides, arrangement).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
         Ok(places
             .iter()
             .enumerate()
@@ -2046,7 +2370,7 @@ impl Cx<'_> {
                 } else {
                     raw::Shape::polygon(crate::packing::regular_polygon(c, p.radius, sides, std::f64::consts::FRAC_PI_2))
                 };
-                raw::Body::generated(format!("g{ix}_p{k}"), material.clone(), h, shape)
+                raw::Body::generated(format!("g{ix}_p{k}"), material(k), h, shape)
             })
             .collect())
     }

@@ -1,5 +1,6 @@
-//! Particle arrangements (work in progress for the contact issue): regular grids of discs or
-//! regular polygons in a rectangular die at a prescribed initial solid ratio.
+//! Particle arrangements: regular grids of discs or regular polygons in a rectangular die at a
+//! prescribed initial solid ratio (this file), random packings of convex polygons and discs
+//! ([`random`]) and the overlap test between particles ([`overlap`]).
 //!
 //! Solid ratio φ = total particle area / die area. A regular nx × ny grid puts one particle at
 //! the centre of each of the nx × ny cells of the die; with cell sizes a × b, the particles fit
@@ -7,6 +8,9 @@
 //! φ < π/4 · min(a, b)/max(a, b) (0.785 for square cells).
 
 use std::f64::consts::PI;
+
+pub mod overlap;
+pub mod random;
 
 /// One particle of an arrangement: centre (mm) and size.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,64 +29,116 @@ pub fn particle_area(sides: usize, r: f64) -> f64 {
     }
 }
 
-/// nx × ny particles (discs if `sides` = 0, else regular polygons with one vertex up) centred in
-/// the cells of the die [0, width] × [0, height], sized so that their total area is
-/// `solid_ratio` × width × height. Errors when the particles would overlap their cells.
-pub fn regular_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64, sides: usize) -> Result<Vec<Placement>, String> {
+/// An ellipse of a grid: centre and semi-axes `[a, b]` along x and y (mm).
+pub type EllipsePlacement = ([f64; 2], [f64; 2]);
+
+/// How the rows of a regular grid are laid out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Arrangement {
+    /// nx particles in each of the ny rows, one in the centre of each cell of the die.
+    #[default]
+    Square,
+    /// Staggered rows: the even rows (from the bottom) hold nx particles at the cell centres,
+    /// the odd rows nx − 1 particles shifted by half a cell, between them (nx · ny − ⌊ny/2⌋
+    /// particles). With cells of height √3/2 × their width the neighbours form equilateral
+    /// triangles.
+    Hexagonal,
+}
+
+/// Centres of the particles of an nx × ny grid in the die [0, width] × [0, height].
+pub fn grid_centres(nx: usize, ny: usize, width: f64, height: f64, arrangement: Arrangement) -> Vec<[f64; 2]> {
+    let (a, b) = (width / nx as f64, height / ny as f64);
+    let mut out = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        let shifted = arrangement == Arrangement::Hexagonal && j % 2 == 1;
+        let (n, dx) = if shifted { (nx - 1, 0.5 * a) } else { (nx, 0.0) };
+        for i in 0..n {
+            out.push([(i as f64 + 0.5) * a + dx, (j as f64 + 0.5) * b]);
+        }
+    }
+    out
+}
+
+/// `(column, row)` of each particle of [`grid_centres`], in the same order.
+pub fn grid_cells(nx: usize, ny: usize, arrangement: Arrangement) -> Vec<(usize, usize)> {
+    (0..ny)
+        .flat_map(|j| {
+            let n = if arrangement == Arrangement::Hexagonal && j % 2 == 1 { nx.saturating_sub(1) } else { nx };
+            (0..n).map(move |i| (i, j))
+        })
+        .collect()
+}
+
+fn check_grid(nx: usize, ny: usize, width: f64, height: f64, arrangement: Arrangement) -> Result<(), String> {
     if nx == 0 || ny == 0 {
         return Err(format!("grid {nx} x {ny}: expected at least one particle in each direction"));
+    }
+    if arrangement == Arrangement::Hexagonal && nx < 2 {
+        return Err(format!("grid {nx} x {ny}: a hexagonal grid needs nx >= 2 (its odd rows hold nx - 1 particles)"));
     }
     if !(width > 0.0 && height > 0.0) {
         return Err(format!("die {width} x {height} mm: expected positive sizes"));
     }
+    Ok(())
+}
+
+/// nx × ny particles (discs if `sides` = 0, else regular polygons with one vertex up) centred in
+/// the cells of the die [0, width] × [0, height], sized so that their total area is
+/// `solid_ratio` × width × height. Errors when the particles would overlap their cells.
+pub fn regular_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64, sides: usize) -> Result<Vec<Placement>, String> {
+    arranged_grid(nx, ny, width, height, solid_ratio, sides, Arrangement::Square)
+}
+
+/// [`regular_grid`] with the rows laid out by `arrangement`. In a hexagonal grid a particle's
+/// neighbours are a cell width away in its row and √(a²/4 + b²) in the next rows (cells a × b),
+/// and the walls are half a cell away, so the particles fit while 2r < min(a, b).
+pub fn arranged_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64, sides: usize, arrangement: Arrangement) -> Result<Vec<Placement>, String> {
+    check_grid(nx, ny, width, height, arrangement)?;
     if sides != 0 && sides < 3 {
         return Err(format!("sides = {sides}: expected 0 (disc) or at least 3"));
     }
     if !(solid_ratio > 0.0 && solid_ratio < 1.0) {
         return Err(format!("solid ratio {solid_ratio}: expected a value in (0, 1)"));
     }
+    let centres = grid_centres(nx, ny, width, height, arrangement);
     let (a, b) = (width / nx as f64, height / ny as f64);
     let unit = particle_area(sides, 1.0);
-    let r = (solid_ratio * a * b / unit).sqrt();
+    let r = match arrangement {
+        // one particle per cell (the same arithmetic as before arrangements existed)
+        Arrangement::Square => (solid_ratio * a * b / unit).sqrt(),
+        Arrangement::Hexagonal => (solid_ratio * width * height / (centres.len() as f64 * unit)).sqrt(),
+    };
     if 2.0 * r >= a.min(b) {
-        let max = unit * (0.5 * a.min(b)).powi(2) / (a * b);
+        let max = centres.len() as f64 * unit * (0.5 * a.min(b)).powi(2) / (width * height);
         return Err(format!(
             "solid ratio {solid_ratio}: particles of radius {r:.4} mm do not fit in cells of {a:.4} x {b:.4} mm; a regular grid allows at most {max:.4}"
         ));
     }
-    let mut out = Vec::with_capacity(nx * ny);
-    for j in 0..ny {
-        for i in 0..nx {
-            out.push(Placement { center: [(i as f64 + 0.5) * a, (j as f64 + 0.5) * b], radius: r });
-        }
-    }
-    Ok(out)
+    Ok(centres.into_iter().map(|center| Placement { center, radius: r }).collect())
 }
 
 /// nx × ny ellipses centred in the cells of the die [0, width] × [0, height], with semi-axes
 /// proportional to the cell (a = s · width/(2 nx), b = s · height/(2 ny)), sized so that their
 /// total area is `solid_ratio` × width × height. Ellipses fill non-square cells better than
 /// discs: the limit is π/4 for any cell shape. Returns (centre, [a, b]) per particle.
-pub fn regular_grid_ellipses(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64) -> Result<Vec<([f64; 2], [f64; 2])>, String> {
-    if nx == 0 || ny == 0 {
-        return Err(format!("grid {nx} x {ny}: expected at least one particle in each direction"));
-    }
-    if !(width > 0.0 && height > 0.0) {
-        return Err(format!("die {width} x {height} mm: expected positive sizes"));
-    }
-    let limit = PI / 4.0;
+pub fn regular_grid_ellipses(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64) -> Result<Vec<EllipsePlacement>, String> {
+    arranged_grid_ellipses(nx, ny, width, height, solid_ratio, Arrangement::Square)
+}
+
+/// [`regular_grid_ellipses`] with the rows laid out by `arrangement` (in the coordinates scaled
+/// by the cell, the ellipses are discs of a hexagonal grid: the limit is π/4 × the particle
+/// count / (nx ny) of the cells).
+pub fn arranged_grid_ellipses(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64, arrangement: Arrangement) -> Result<Vec<EllipsePlacement>, String> {
+    check_grid(nx, ny, width, height, arrangement)?;
+    let centres = grid_centres(nx, ny, width, height, arrangement);
+    let cells = centres.len() as f64 / (nx * ny) as f64;
+    let limit = PI / 4.0 * cells;
     if !(solid_ratio > 0.0 && solid_ratio < limit) {
         return Err(format!("solid ratio {solid_ratio}: a regular grid of ellipses allows values in (0, {limit:.4})"));
     }
     let (cw, ch) = (width / nx as f64, height / ny as f64);
     let s = (solid_ratio / limit).sqrt();
-    let mut out = Vec::with_capacity(nx * ny);
-    for j in 0..ny {
-        for i in 0..nx {
-            out.push(([(i as f64 + 0.5) * cw, (j as f64 + 0.5) * ch], [0.5 * s * cw, 0.5 * s * ch]));
-        }
-    }
-    Ok(out)
+    Ok(centres.into_iter().map(|c| (c, [0.5 * s * cw, 0.5 * s * ch])).collect())
 }
 
 /// Vertices of a regular k-gon of circumscribed radius r around `center`, counter-clockwise,
@@ -139,6 +195,29 @@ mod tests {
         assert!((area / 1e6 - 0.65).abs() < 1e-12);
         assert!(p.iter().all(|(_, ab)| 2.0 * ab[0] < 250.0 && 2.0 * ab[1] < 200.0));
         assert!(regular_grid_ellipses(4, 5, 1000.0, 1000.0, 0.79).is_err());
+    }
+
+    /// A hexagonal 3 x 3 grid: rows of 3, 2, 3 particles, the middle row between the others;
+    /// exact solid ratio, neighbours apart, the limit min(a, b)/2 on the radius.
+    #[test]
+    fn hexagonal_grid() {
+        let (w, h) = (30.0, 30.0 * 3f64.sqrt() / 2.0);
+        let p = arranged_grid(3, 3, w, h, 0.6, 0, Arrangement::Hexagonal).unwrap();
+        assert_eq!(p.len(), 8);
+        assert_eq!(p[3].center, [10.0, 1.5 * h / 3.0]);
+        let area: f64 = p.iter().map(|q| particle_area(0, q.radius)).sum();
+        assert!((area / (w * h) - 0.6).abs() < 1e-12);
+        for (i, a) in p.iter().enumerate() {
+            for b in &p[i + 1..] {
+                let d = ((a.center[0] - b.center[0]).powi(2) + (a.center[1] - b.center[1]).powi(2)).sqrt();
+                assert!(d > a.radius + b.radius);
+            }
+        }
+        assert!(arranged_grid(3, 3, w, h, 0.65, 0, Arrangement::Hexagonal).is_err());
+        assert!(arranged_grid(1, 3, w, h, 0.3, 0, Arrangement::Hexagonal).is_err());
+        let e = arranged_grid_ellipses(3, 3, w, h, 0.6, Arrangement::Hexagonal).unwrap();
+        let area: f64 = e.iter().map(|(_, ab)| PI * ab[0] * ab[1]).sum();
+        assert!((area / (w * h) - 0.6).abs() < 1e-12);
     }
 
     /// The polygon area formula agrees with the shoelace area of the generated vertices.

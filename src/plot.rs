@@ -882,6 +882,112 @@ fn draw_snapshot<DB: DrawingBackend>(
 }
 
 // ---------------------------------------------------------------------------------------------
+// Packing preview
+
+/// Size of the packing preview, pixels.
+pub const PACKING_SIZE: (u32, u32) = (1000, 860);
+
+/// One particle of a packing preview: its outline (mm) and its material (an index into the
+/// material names, which also picks the colour from [`SERIES_COLOURS`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreviewParticle {
+    pub outline: Vec<[f64; 2]>,
+    pub material: usize,
+}
+
+/// Draw a packing into `png`: the particles filled with the colour of their material and
+/// outlined, the die `[x0, x1, y0, y1]` (when there is one) as a black rectangle, a legend of
+/// the materials with their particle counts on the right; the lines of `title` head the
+/// picture.
+pub fn packing_png(particles: &[PreviewParticle], materials: &[String], die: Option<[f64; 4]>, title: &[String], png: &Path) -> Result<(), PlotError> {
+    if particles.is_empty() {
+        return Err(input(png, "no particles to draw"));
+    }
+    ensure_font()?;
+    let root = BitMapBackend::new(png, PACKING_SIZE).into_drawing_area();
+    draw_packing(&root, particles, materials, die, title).map_err(draw_err(png))?;
+    root.present().map_err(draw_err(png))?;
+    tracing::info!(png = %png.display(), n = particles.len(), "plot: packing preview");
+    Ok(())
+}
+
+fn draw_packing<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    particles: &[PreviewParticle],
+    materials: &[String],
+    die: Option<[f64; 4]>,
+    title: &[String],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    let mut body = root.clone();
+    for line in title {
+        body = body.titled(line, ("sans-serif", 20))?;
+    }
+    let mut bb = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+    let die_pts = die.map(|d| vec![[d[0], d[2]], [d[1], d[3]]]).unwrap_or_default();
+    for [x, y] in particles.iter().flat_map(|p| p.outline.iter().copied()).chain(die_pts) {
+        if x.is_finite() && y.is_finite() {
+            bb = [bb[0].min(x), bb[1].max(x), bb[2].min(y), bb[3].max(y)];
+        }
+    }
+    let (x0, x1) = padded(bb[0], bb[1], 0.03);
+    let (y0, y1) = padded(bb[2], bb[3], 0.03);
+    const MARGIN: u32 = 15;
+    const XL: u32 = 45;
+    const YL: u32 = 60;
+    let (w, _) = body.dim_in_pixel();
+    let (body, legend) = body.split_horizontally(w.saturating_sub(COLOUR_BAR_PANEL + 40));
+    let (pw, ph) = body.dim_in_pixel();
+    let pw = pw.saturating_sub(2 * MARGIN + YL).max(1) as f64;
+    let ph = ph.saturating_sub(2 * MARGIN + XL).max(1) as f64;
+    let scale = ((x1 - x0) / pw).max((y1 - y0) / ph);
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let (hx, hy) = (0.5 * pw * scale, 0.5 * ph * scale);
+    let mut chart = ChartBuilder::on(&body)
+        .margin(MARGIN)
+        .x_label_area_size(XL)
+        .y_label_area_size(YL)
+        .build_cartesian_2d(cx - hx..cx + hx, cy - hy..cy + hy)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("x [mm]")
+        .y_desc("y [mm]")
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()?;
+    let colour = |m: usize| {
+        let (r, g, b) = SERIES_COLOURS[m % SERIES_COLOURS.len()];
+        RGBColor(r, g, b)
+    };
+    let pts = |p: &PreviewParticle| p.outline.iter().map(|v| (v[0], v[1])).collect::<Vec<_>>();
+    chart.draw_series(particles.iter().map(|p| Polygon::new(pts(p), colour(p.material).mix(0.55).filled())))?;
+    chart.draw_series(particles.iter().map(|p| {
+        let mut v = pts(p);
+        if let Some(&first) = v.first() {
+            v.push(first);
+        }
+        PathElement::new(v, colour(p.material).stroke_width(2))
+    }))?;
+    if let Some([a, b, c, d]) = die {
+        chart.draw_series(std::iter::once(PathElement::new(vec![(a, c), (b, c), (b, d), (a, d), (a, c)], BLACK.stroke_width(3))))?;
+    }
+    // legend in the right-hand panel: the materials that occur, with their particle counts
+    let mut y = 2 * MARGIN as i32;
+    for (m, name) in materials.iter().enumerate() {
+        let n = particles.iter().filter(|p| p.material == m).count();
+        if n == 0 {
+            continue;
+        }
+        legend.draw(&Rectangle::new([(10, y), (34, y + 16)], colour(m).mix(0.55).filled()))?;
+        legend.draw(&Rectangle::new([(10, y), (34, y + 16)], colour(m).stroke_width(2)))?;
+        legend.draw(&Text::new(format!("{name} ({n})"), (42, y), ("sans-serif", 15)))?;
+        y += 26;
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
 // A results folder
 
 /// A run to plot: its results folder and its label in the legends and titles.

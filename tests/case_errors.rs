@@ -569,3 +569,148 @@ fn lagrange_regularisation_is_checked_and_defaults_to_1e_4() {
         assert_has(&e, &["contact.lagrange_regularisation", v, "0 <= r < 1"]);
     }
 }
+
+/// Overlapping particles are an input error at the later body, naming both bodies, the depth
+/// and the expectation: exact for two discs, GJK plus a projection search for polygons and
+/// ellipses; touching particles are accepted.
+#[test]
+fn overlapping_bodies_are_rejected_naming_the_pair() {
+    let two = |a: &str, b: &str| {
+        format!(
+            "{BASE}\n[[bodies]]\nname = \"p\"\nmaterial = \"alu\"\nmesh_size = 1.0\nshape = {a}\n\n[[bodies]]\nname = \"q\"\nmaterial = \"alu\"\nmesh_size = 1.0\nshape = {b}\n"
+        )
+        .replace("origin = [0.0, 0.0], size = [20.0, 20.0]", "origin = [-100.0, -100.0], size = [20.0, 20.0]")
+    };
+    // discs: centres 10 apart, radii 6 + 5 -> overlap 1 mm
+    let e = err_of(&two("{ type = \"disc\", center = [0.0, 0.0], radius = 6.0 }", "{ type = \"disc\", center = [10.0, 0.0], radius = 5.0 }"));
+    assert_eq!(e.key, "bodies[2]");
+    assert_has(&e, &["\"q\"", "\"p\"", "bodies[1]", "overlaps", "by 1.0000 mm", "expected particles that do not overlap"]);
+    // touching discs are fine
+    parse(&two("{ type = \"disc\", center = [0.0, 0.0], radius = 5.0 }", "{ type = \"disc\", center = [10.0, 0.0], radius = 5.0 }")).unwrap();
+    // a square and an ellipse reaching 0.25 mm into it
+    let sq = "{ type = \"polygon\", vertices = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]] }";
+    let e = err_of(&two(sq, "{ type = \"ellipse\", center = [5.0, 12.75], semi_axes = [1.0, 3.0] }"));
+    assert_has(&e, &["\"q\" (ellipse) overlaps body \"p\"", "polygon", "by 0.2500 mm"]);
+    // ... and the same ellipse just clear of it
+    parse(&two(sq, "{ type = \"ellipse\", center = [5.0, 13.01], semi_axes = [1.0, 3.0] }")).unwrap();
+    // a rotated ellipse crossing a corner of the square
+    let e = err_of(&two(sq, "{ type = \"ellipse\", center = [11.5, 11.5], semi_axes = [3.0, 0.5], angle = 45.0 }"));
+    assert_has(&e, &["bodies[1]", "overlaps"]);
+    // two polygons sharing a side touch without overlapping
+    parse(&two(sq, "{ type = \"polygon\", vertices = [[10.0, 0.0], [20.0, 0.0], [15.0, 10.0]] }")).unwrap();
+    let e = err_of(&two(sq, "{ type = \"polygon\", vertices = [[9.0, 0.0], [20.0, 0.0], [15.0, 10.0]] }"));
+    assert_has(&e, &["\"q\" (polygon) overlaps body \"p\""]);
+    // the rectangle body of BASE is checked too
+    let e = err_of(&with("mesh_size = 2.0\nshape", "mesh_size = 2.0\nshape").replace("[time]", "[[bodies]]\nname = \"d\"\nmaterial = \"alu\"\nmesh_size = 1.0\nshape = { type = \"disc\", center = [25.0, 10.0], radius = 6.0 }\n\n[time]"));
+    assert_has(&e, &["\"d\" (disc) overlaps body \"block\" (bodies[0], rectangle) by 1.0000 mm"]);
+}
+
+/// Grid particles that overlap a listed body are named by their generated names.
+#[test]
+fn grid_particles_overlapping_a_body_are_named() {
+    let text = format!(
+        "{}\n[[walls]]\nside = \"left\"\nposition = 0.0\n[[walls]]\nside = \"right\"\nposition = 100.0\n[[walls]]\nside = \"bottom\"\nposition = 0.0\n[[walls]]\nside = \"top\"\nposition = 100.0\n\n[[grids]]\nmaterial = \"alu\"\nnx = 2\nny = 2\nsolid_ratio = 0.5\nmesh_size = 5.0\n",
+        BASE
+    );
+    let e = err_of(&text);
+    assert_has(&e, &["\"g0_p0\" (disc) overlaps body \"block\" (bodies[0], rectangle)"]);
+}
+
+/// `[[packings]]`: every bad key is a CaseError naming the key, the value and the expectation.
+#[test]
+fn packing_keys_are_checked() {
+    let walls = "\n[[walls]]\nside = \"left\"\nposition = 100.0\n[[walls]]\nside = \"right\"\nposition = 200.0\n[[walls]]\nside = \"bottom\"\nposition = 0.0\n[[walls]]\nside = \"top\"\nposition = 100.0\n";
+    let good = "\n[[packings]]\nkind = \"voronoi_polygons\"\ncount = 4\nseed = 1\nsolid_ratio = 0.7\nmaterial = \"alu\"\nmesh_size = 10.0\n";
+    let case = |packing: &str| format!("{BASE}{walls}{packing}");
+    let c = parse(&case(good)).unwrap();
+    assert_eq!(c.bodies.len(), 5);
+    assert_eq!(c.bodies[1].name, "r0_p0");
+    for (from, to, key, parts) in [
+        ("kind = \"voronoi_polygons\"", "kind = \"squares\"", "packings[0].kind", &["\"squares\"", "\"voronoi_polygons\", \"voronoi_ellipses\", \"discs\""][..]),
+        ("seed = 1", "seed = 1\naspect = 20.0", "packings[0].aspect", &["[0.1, 10]"][..]),
+        ("kind = \"voronoi_polygons\"", "kind = \"discs\"\naspect = 2.0", "packings[0].aspect", &["not a parameter of kind \"discs\""][..]),
+        ("kind = \"voronoi_polygons\"", "kind = \"voronoi_ellipses\"\nlloyd = 3", "packings[0].solid_ratio", &["0.7", "inscribed in the cells cover"][..]),
+        ("count = 4", "count = 0", "packings[0].count", &["value 0", ">= 1"][..]),
+        ("count = 4", "count = 100000", "packings[0].count", &["at most 5000"][..]),
+        ("seed = 1", "seed = -1", "packings[0].seed", &["value -1", ">= 0"][..]),
+        ("solid_ratio = 0.7", "solid_ratio = 1.2", "packings[0].solid_ratio", &["1.2", "(0, 1)"][..]),
+        ("solid_ratio = 0.7\n", "", "packings[0].solid_ratio", &["missing"][..]),
+        ("material = \"alu\"", "material = \"steel\"", "packings[0].material", &["no material named \"steel\"", "known: alu"][..]),
+        ("material = \"alu\"", "materials = [\"alu\", \"lead\"]", "packings[0].materials[1]", &["\"lead\""][..]),
+        ("material = \"alu\"", "materials = [\"alu\"]\nfractions = [0.5, 0.5]", "packings[0].fractions", &["2 value(s) for 1 material(s)"][..]),
+        ("material = \"alu\"", "materials = [\"alu\"]\nfractions = [-1.0]", "packings[0].fractions[0]", &["> 0"][..]),
+        ("material = \"alu\"", "material = \"alu\"\nmaterials = [\"alu\"]", "packings[0].materials", &["not both"][..]),
+        ("material = \"alu\"\n", "", "packings[0].material", &["missing"][..]),
+        ("mesh_size = 10.0", "mesh_size = 0.0", "packings[0].mesh_size", &["> 0"][..]),
+        ("seed = 1", "seed = 1\nlloyd = 5000", "packings[0].lloyd", &["at most 1000"][..]),
+        ("seed = 1", "seed = 1\nsizes = { distribution = \"gauss\" }", "packings[0].sizes.distribution", &["\"gauss\"", "\"lognormal\""][..]),
+        ("seed = 1", "seed = 1\nsizes = { distribution = \"uniform\" }", "packings[0].sizes.ratio", &["missing"][..]),
+        ("seed = 1", "seed = 1\nsizes = { distribution = \"uniform\", ratio = 0.5 }", "packings[0].sizes.ratio", &["(1, 100]"][..]),
+        ("seed = 1", "seed = 1\nsizes = { distribution = \"lognormal\", ratio = 2.0 }", "packings[0].sizes.sigma", &["missing"][..]),
+        ("seed = 1", "seed = 1\nsizes = { distribution = \"equal\", sigma = 0.1 }", "packings[0].sizes.sigma", &["not a parameter"][..]),
+        ("seed = 1", "seed = 1\nshape = \"disc\"", "packings[0].shape", &["unknown field"][..]),
+        ("kind = \"voronoi_polygons\"\ncount = 4\nseed = 1\nsolid_ratio = 0.7", "kind = \"discs\"\ncount = 4\nseed = 1\nsolid_ratio = 0.784", "packings[0].solid_ratio", &["could not be pushed apart", "lower solid ratio"][..]),
+    ] {
+        let text = case(&good.replace(from, to));
+        let e = err_of(&text);
+        assert_eq!(e.key, key, "{to}: {e}");
+        assert_has(&e, parts);
+    }
+    // no walls: no die
+    let e = err_of(&format!("{BASE}{good}"));
+    assert_eq!(e.key, "packings[0]");
+    assert_has(&e, &["needs all four [[walls]]"]);
+}
+
+/// `[[grids]] arrangement`: hexagonal grids have staggered rows of nx and nx - 1 particles;
+/// an unknown arrangement or nx < 2 is an error naming the key.
+#[test]
+fn hexagonal_grids() {
+    let text = format!(
+        "{}\n[[walls]]\nside = \"left\"\nposition = 100.0\n[[walls]]\nside = \"right\"\nposition = 130.0\n[[walls]]\nside = \"bottom\"\nposition = 0.0\n[[walls]]\nside = \"top\"\nposition = 26.0\n\n[[grids]]\nmaterial = \"alu\"\nnx = 3\nny = 3\narrangement = \"hexagonal\"\nsolid_ratio = 0.55\nmesh_size = 2.0\n",
+        BASE
+    );
+    let c = parse(&text).unwrap();
+    assert_eq!(c.bodies.len(), 1 + 8);
+    let e = err_of(&text.replace("\"hexagonal\"", "\"triangular\""));
+    assert_eq!(e.key, "grids[0].arrangement");
+    assert_has(&e, &["\"triangular\"", "\"square\", \"hexagonal\""]);
+    let e = err_of(&text.replace("nx = 3", "nx = 1"));
+    assert_eq!(e.key, "grids[0].nx");
+    assert_has(&e, &["nx >= 2"]);
+}
+
+/// `[[grids]]` mixtures: by pattern (checkerboard, rows, columns) or by fraction (shuffled by a
+/// seed, reproducibly); bad combinations name the key.
+#[test]
+fn grid_material_mixtures() {
+    let base = format!(
+        "{}\n[[materials]]\nname = \"lead\"\nmodel = \"elastic\"\nyoungs_modulus = 16000.0\npoisson_ratio = 0.44\n\n[[walls]]\nside = \"left\"\nposition = 100.0\n[[walls]]\nside = \"right\"\nposition = 140.0\n[[walls]]\nside = \"bottom\"\nposition = 0.0\n[[walls]]\nside = \"top\"\nposition = 40.0\n\n[[grids]]\nmaterials = [\"alu\", \"lead\"]\nnx = 4\nny = 4\nsolid_ratio = 0.6\nmesh_size = 2.0\n",
+        BASE
+    );
+    let materials = |text: &str| -> Vec<usize> { parse(text).unwrap().bodies[1..].iter().map(|b| b.material).collect() };
+    let board = materials(&format!("{base}pattern = \"checkerboard\"\n"));
+    assert_eq!(board, vec![0, 1, 0, 1, 1, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1, 0]);
+    let rows = materials(&format!("{base}pattern = \"rows\"\n"));
+    assert_eq!(rows, vec![0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 1, 1, 1, 1]);
+    let cols = materials(&format!("{base}pattern = \"columns\"\n"));
+    assert_eq!(cols[..4], [0, 1, 0, 1]);
+    // by fraction: 3 : 1 of 16 = 12 and 4, shuffled, the same for the same seed
+    let a = materials(&format!("{base}fractions = [3.0, 1.0]\nseed = 5\n"));
+    assert_eq!(a.iter().filter(|&&m| m == 1).count(), 4);
+    assert_eq!(a, materials(&format!("{base}fractions = [3.0, 1.0]\nseed = 5\n")));
+    assert_ne!(a, materials(&format!("{base}fractions = [3.0, 1.0]\nseed = 6\n")));
+    for (extra, key, part) in [
+        ("pattern = \"stripes\"\n", "grids[0].pattern", "\"checkerboard\", \"rows\", \"columns\""),
+        ("pattern = \"rows\"\nfractions = [1.0, 1.0]\n", "grids[0].fractions", "not allowed with pattern"),
+        ("pattern = \"rows\"\nseed = 3\n", "grids[0].seed", "not allowed with pattern"),
+        ("fractions = [1.0]\n", "grids[0].fractions", "1 value(s) for 2 material(s)"),
+    ] {
+        let e = err_of(&format!("{base}{extra}"));
+        assert_eq!(e.key, key, "{extra}: {e}");
+        assert_has(&e, &[part]);
+    }
+    let e = err_of(&base.replace("materials = [\"alu\", \"lead\"]", "materials = [\"alu\", \"tin\"]"));
+    assert_eq!(e.key, "grids[0].materials[1]");
+    assert_has(&e, &["no material named \"tin\""]);
+}
