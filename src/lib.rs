@@ -35,4 +35,5 @@ pub mod results;
 pub mod packing;
 pub mod plot;
 pub mod solver;
+pub mod study;
 pub mod verify;

@@ -85,6 +85,20 @@ enum Command {
         #[arg(short, long, default_value = "pack")]
         out: PathBuf,
     },
+    /// Run a study: the runs of a study file (a base case with a few keys changed, swept or
+    /// listed) side by side, each into OUT/<label>/, then one pressure plot of all of them
+    /// (OUT/pressure_compare.png, .svg) and a table of their final values (OUT/study.csv,
+    /// OUT/study.md). Exit 1 if a run failed (the others and the table are still written).
+    Study {
+        /// The study file (TOML; see docs/case-file.md, "Studies").
+        study: PathBuf,
+        /// Output directory.
+        #[arg(short, long, default_value = "study")]
+        out: PathBuf,
+        /// Runs at once (overrides the study's `parallel`; default: the number of cores).
+        #[arg(long)]
+        parallel: Option<usize>,
+    },
     /// Validate a case file without running it.
     Check {
         case: PathBuf,
@@ -163,6 +177,7 @@ fn main() -> ExitCode {
         },
         Command::Plot { dir, compare, label, steps, out } => plot(dir, compare, label, steps, out),
         Command::Pack { case, out } => pack(&case, &out),
+        Command::Study { study, out, parallel } => run_study(&study, &out, parallel),
         Command::Run { case, out, threads, quiet, no_plots } => {
             let (c, label) = match &case {
                 Some(p) => match case::load(p) {
@@ -206,6 +221,145 @@ fn main() -> ExitCode {
 
 /// `mpfem pack`: expand the case's grids and packings into bodies, write them as a case file
 /// and a preview.
+/// `mpfem study`: every run in its own folder, at most `parallel` at once (one thread each),
+/// then the overlay plot and the table of final values.
+fn run_study(path: &Path, out: &Path, parallel: Option<usize>) -> ExitCode {
+    let study = match mpfem::study::load(path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    // every run's case is validated before anything runs
+    let mut cases = Vec::new();
+    for r in &study.runs {
+        let base = r.case_path.parent().unwrap_or(Path::new("."));
+        match case::parse(&r.text, base) {
+            Ok(c) => cases.push(c),
+            Err(e) => {
+                eprintln!("error: {}: run \"{}\": {e}", path.display(), r.label);
+                return ExitCode::from(2);
+            }
+        }
+    }
+    if let Err(e) = std::fs::create_dir_all(out) {
+        eprintln!("error: cannot create {}: {e}", out.display());
+        return ExitCode::from(2);
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let workers = parallel.or(study.parallel).unwrap_or(cores).clamp(1, study.runs.len());
+    eprintln!("mpfem: study \"{}\": {} run(s), {workers} at once, into {}", study.title, study.runs.len(), out.display());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let codes: Vec<std::sync::Mutex<Option<u8>>> = study.runs.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    let cases: Vec<std::sync::Mutex<Option<Case>>> = cases.into_iter().map(|c| std::sync::Mutex::new(Some(c))).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let Some(r) = study.runs.get(i) else { break };
+                let Some(c) = cases[i].lock().ok().and_then(|mut c| c.take()) else { break };
+                let dir = out.join(&r.label);
+                let case_path = dir.join("case.toml");
+                let written = std::fs::create_dir_all(&dir).and_then(|_| std::fs::write(&case_path, &r.text));
+                let code = match written {
+                    Err(e) => {
+                        eprintln!("error: run \"{}\": cannot write {}: {e}", r.label, case_path.display());
+                        2
+                    }
+                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true) {
+                        Ok(code) if code == ExitCode::SUCCESS => 0,
+                        Ok(_) => 1,
+                        Err(e) => {
+                            eprintln!("error: run \"{}\": {e:#}", r.label);
+                            1
+                        }
+                    },
+                };
+                if let Ok(mut slot) = codes[i].lock() {
+                    *slot = Some(code);
+                }
+            });
+        }
+    });
+    let failed: Vec<&str> = study
+        .runs
+        .iter()
+        .zip(&codes)
+        .filter(|(_, c)| c.lock().ok().and_then(|c| *c) != Some(0))
+        .map(|(r, _)| r.label.as_str())
+        .collect();
+    // the overlay of every run that wrote a history, and the table
+    let dirs: Vec<(String, PathBuf)> = study.runs.iter().map(|r| (r.label.clone(), out.join(&r.label))).filter(|(_, d)| d.join("history.csv").is_file()).collect();
+    if !dirs.is_empty() {
+        let req = PlotRequest {
+            out: out.to_path_buf(),
+            runs: dirs.iter().map(|(l, d)| RunDir { dir: d.clone(), label: l.clone() }).collect(),
+            steps: StepChoice::Explicit(Vec::new()),
+        };
+        match mpfem::plot::plot_results(&req) {
+            Ok(r) => report_plots(&r),
+            Err(e) => eprintln!("warning: study plot: {e}"),
+        }
+    }
+    match write_study_table(out, &study) {
+        Ok(paths) => eprintln!("mpfem: wrote {}", paths.join(", ")),
+        Err(e) => eprintln!("warning: study table: {e}"),
+    }
+    if failed.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!("error: {} of {} run(s) failed: {}", failed.len(), study.runs.len(), failed.join(", "));
+        ExitCode::from(1)
+    }
+}
+
+/// OUT/study.csv and OUT/study.md: one row per run with its final values from summary.json.
+fn write_study_table(out: &Path, study: &mpfem::study::Study) -> std::io::Result<Vec<String>> {
+    let head = ["label", "status", "stop_reason", "steps", "solid_ratio", "p_left", "p_right", "p_bottom", "p_top", "volume_error", "max_particle_volume_error", "heckel_k", "kawakita_a", "kawakita_b", "wall_time_s"];
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    for r in &study.runs {
+        let s: serde_json::Value = std::fs::read_to_string(out.join(&r.label).join("summary.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok())
+            .unwrap_or(serde_json::Value::Null);
+        let num = |v: &serde_json::Value| v.as_f64().map_or(String::new(), |x| format!("{x:.6e}"));
+        let f = &s["final"];
+        let text = |v: &serde_json::Value| v.as_str().unwrap_or("").to_string();
+        let mut row = vec![
+            r.label.clone(),
+            s["status"].as_str().unwrap_or("not run").to_string(),
+            text(&s["run"]["stop_reason"]),
+            s["run"]["steps"].as_u64().map_or(String::new(), |n| n.to_string()),
+            num(&f["solid_ratio"]),
+        ];
+        for k in 0..4 {
+            row.push(num(&f["pressure"][k]));
+        }
+        row.push(num(&f["volume_error"]));
+        row.push(num(&f["max_particle_volume_error"]));
+        row.push(num(&s["fits"]["heckel"]["k"]));
+        row.push(num(&s["fits"]["kawakita"]["a"]));
+        row.push(num(&s["fits"]["kawakita"]["b"]));
+        row.push(num(&s["wall_time_s"]));
+        rows.push(row);
+    }
+    let csv_path = out.join("study.csv");
+    let quote = |c: &String| if c.contains([',', '"']) { format!("\"{}\"", c.replace('"', "\"\"")) } else { c.clone() };
+    let mut csv = head.join(",") + "\n";
+    for r in &rows {
+        csv += &(r.iter().map(quote).collect::<Vec<_>>().join(",") + "\n");
+    }
+    std::fs::write(&csv_path, csv)?;
+    let md_path = out.join("study.md");
+    let mut md = format!("# {}\n\n| {} |\n|{}|\n", study.title, head.join(" | "), vec!["---"; head.len()].join("|"));
+    for r in &rows {
+        md += &format!("| {} |\n", r.join(" | "));
+    }
+    std::fs::write(&md_path, md)?;
+    Ok(vec![csv_path.display().to_string(), md_path.display().to_string()])
+}
+
 fn pack(case_path: &Path, out: &Path) -> ExitCode {
     let c = match case::load(case_path) {
         Ok(c) => c,
