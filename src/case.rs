@@ -245,6 +245,8 @@ pub struct StopSpec {
     /// End the run normally (status "jammed") when the walls cannot advance any more (a step
     /// fails below dt_min), instead of failing.
     pub jam: bool,
+    /// A failed step counts as a jam only at or above this solid ratio (default 0.9).
+    pub jam_solid_ratio: f64,
 }
 
 /// A named material.
@@ -827,6 +829,7 @@ mod raw {
     pub struct StopRaw {
         pub solid_ratio: Option<f64>,
         pub jam: Option<bool>,
+        pub jam_solid_ratio: Option<f64>,
     }
 
     impl Shape {
@@ -1308,13 +1311,17 @@ impl Cx<'_> {
             }
         }
         let stop = match r.stop {
-            None => StopSpec { solid_ratio: None, jam: true },
+            None => StopSpec { solid_ratio: None, jam: true, jam_solid_ratio: 0.9 },
             Some(st) => StopSpec {
                 solid_ratio: match st.solid_ratio {
                     Some(v) => Some(self.num("stop.solid_ratio", v, v > 0.0 && v <= 1.0, "a solid ratio in (0, 1]")?),
                     None => None,
                 },
                 jam: st.jam.unwrap_or(true),
+                jam_solid_ratio: match st.jam_solid_ratio {
+                    Some(v) => self.num("stop.jam_solid_ratio", v, v > 0.0 && v <= 1.0, "a solid ratio in (0, 1]")?,
+                    None => 0.9,
+                },
             },
         };
         let mut raw_bodies = r.bodies.unwrap_or_default();

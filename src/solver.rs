@@ -453,7 +453,8 @@ impl Simulation {
     }
 
     /// A failed step counts as a jam (the walls cannot advance any more) only when the last
-    /// converged state is dense (solid ratio ≥ 0.9) and every moving wall carries load;
+    /// converged state is dense (solid ratio ≥ `[stop] jam_solid_ratio`, 0.9 by default) and
+    /// every moving wall carries load;
     /// otherwise the failure is a convergence failure and is reported as an error.
     fn is_jammed(&self, last: Option<&StepReport>) -> bool {
         let Some(c) = last.and_then(|r| r.compaction.as_ref()) else { return false };
@@ -461,7 +462,7 @@ impl Simulation {
             let k = w.side.index();
             w.velocity == 0.0 || c.force[k] > 0.0
         });
-        !self.model.walls.is_empty() && c.solid_ratio >= 0.9 && moving_loaded
+        !self.model.walls.is_empty() && c.solid_ratio >= self.model.stop.jam_solid_ratio && moving_loaded
     }
 
     /// One converged step of size `dt`, or smaller after cut-backs (the report says which).
