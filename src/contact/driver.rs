@@ -386,9 +386,10 @@ impl ContactProblem {
             if g.gap < -self.h_of(self.slaves[si].1) {
                 continue; // deeper than an element: not a physical contact of this node
             }
-            // a tie is bilateral: only nodes that touch (or were tied before) are tied
+            // a tie is bilateral: only nodes that touch, or have passed the surface within the
+            // step (a wall or particle moving faster than the touch band), or were tied before
             if matches!(self.spec.kind, ContactKind::Cohering)
-                && g.gap.abs() > TOUCH * self.h_of(self.slaves[si].1)
+                && g.gap > TOUCH * self.h_of(self.slaves[si].1)
                 && !self.nts_hist.get(&(node, seg)).is_some_and(|h| h.active)
             {
                 continue;
