@@ -702,6 +702,43 @@ fn draw_pressure<DB: DrawingBackend>(
     Ok(())
 }
 
+/// Margin, x-label and y-label areas of the equal-aspect charts (pixels).
+const MARGIN: u32 = 15;
+const XL: u32 = 45;
+const YL: u32 = 60;
+
+/// A chart on `area` over the bounding box `bb` = [x_min, x_max, y_min, y_max] (mm, padded by
+/// 3 %) with equal scales on both axes: the plot area is the panel less the margins and label
+/// areas (exact pixel sizes), and the ranges are widened to its shape; axes in mm, no grid.
+#[allow(clippy::type_complexity)]
+fn equal_aspect_chart<'a, DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    bb: [f64; 4],
+) -> Result<ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>, DrawingAreaErrorKind<DB::ErrorType>> {
+    let (x0, x1) = padded(bb[0], bb[1], 0.03);
+    let (y0, y1) = padded(bb[2], bb[3], 0.03);
+    let (pw, ph) = area.dim_in_pixel();
+    let pw = pw.saturating_sub(2 * MARGIN + YL).max(1) as f64;
+    let ph = ph.saturating_sub(2 * MARGIN + XL).max(1) as f64;
+    let scale = ((x1 - x0) / pw).max((y1 - y0) / ph);
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let (hx, hy) = (0.5 * pw * scale, 0.5 * ph * scale);
+    let mut chart = ChartBuilder::on(area)
+        .margin(MARGIN)
+        .x_label_area_size(XL)
+        .y_label_area_size(YL)
+        .build_cartesian_2d(cx - hx..cx + hx, cy - hy..cy + hy)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("x [mm]")
+        .y_desc("y [mm]")
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()?;
+    Ok(chart)
+}
+
 /// A filled marker of half-size `r` centred at `c` (pixels): circle (left), triangle (right),
 /// square (bottom), diamond (top).
 fn marker<DB: DrawingBackend>(
@@ -788,32 +825,11 @@ fn draw_snapshot<DB: DrawingBackend>(
             bb = [bb[0].min(x), bb[1].max(x), bb[2].min(y), bb[3].max(y)];
         }
     }
-    let (x0, x1) = padded(bb[0], bb[1], 0.03);
-    let (y0, y1) = padded(bb[2], bb[3], 0.03);
-    // equal aspect: the plot area is the panel less the margins and label areas (exact pixel
-    // sizes), and the ranges are widened to its shape
-    const MARGIN: u32 = 15;
-    const XL: u32 = 45;
-    const YL: u32 = 60;
-    let (pw, ph) = left.dim_in_pixel();
-    let pw = pw.saturating_sub(2 * MARGIN + YL).max(1) as f64;
-    let ph = ph.saturating_sub(2 * MARGIN + XL).max(1) as f64;
-    let scale = ((x1 - x0) / pw).max((y1 - y0) / ph);
-    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let (hx, hy) = (0.5 * pw * scale, 0.5 * ph * scale);
-    let mut chart = ChartBuilder::on(&left)
-        .margin(MARGIN)
-        .x_label_area_size(XL)
-        .y_label_area_size(YL)
-        .build_cartesian_2d(cx - hx..cx + hx, cy - hy..cy + hy)?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc("x [mm]")
-        .y_desc("y [mm]")
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .draw()?;
+    let mut chart = equal_aspect_chart(&left, bb)?;
+    let (pw, ph) = {
+        let (w, h) = chart.plotting_area().dim_in_pixel();
+        (w as f64, h as f64)
+    };
 
     let (lo, hi) = stress_range(snap);
     let colour = |v: f64| {
@@ -930,32 +946,9 @@ fn draw_packing<DB: DrawingBackend>(
             bb = [bb[0].min(x), bb[1].max(x), bb[2].min(y), bb[3].max(y)];
         }
     }
-    let (x0, x1) = padded(bb[0], bb[1], 0.03);
-    let (y0, y1) = padded(bb[2], bb[3], 0.03);
-    const MARGIN: u32 = 15;
-    const XL: u32 = 45;
-    const YL: u32 = 60;
     let (w, _) = body.dim_in_pixel();
     let (body, legend) = body.split_horizontally(w.saturating_sub(COLOUR_BAR_PANEL + 40));
-    let (pw, ph) = body.dim_in_pixel();
-    let pw = pw.saturating_sub(2 * MARGIN + YL).max(1) as f64;
-    let ph = ph.saturating_sub(2 * MARGIN + XL).max(1) as f64;
-    let scale = ((x1 - x0) / pw).max((y1 - y0) / ph);
-    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let (hx, hy) = (0.5 * pw * scale, 0.5 * ph * scale);
-    let mut chart = ChartBuilder::on(&body)
-        .margin(MARGIN)
-        .x_label_area_size(XL)
-        .y_label_area_size(YL)
-        .build_cartesian_2d(cx - hx..cx + hx, cy - hy..cy + hy)?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_desc("x [mm]")
-        .y_desc("y [mm]")
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .draw()?;
+    let mut chart = equal_aspect_chart(&body, bb)?;
     let colour = |m: usize| {
         let (r, g, b) = SERIES_COLOURS[m % SERIES_COLOURS.len()];
         RGBColor(r, g, b)
