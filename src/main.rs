@@ -6,6 +6,7 @@
 //! mpfem pack CASE.toml [--out DIR]    expand grids and packings: DIR/packed.toml, packing.png
 //! mpfem verify                        run the verification set and print the table
 //! mpfem plot DIR [--compare DIR2 ...]  redraw the plots of a results folder
+//! mpfem study STUDY.toml [--out DIR]  several runs of a case side by side: one plot, one table
 //! ```
 //! Exit codes: 0 success, 1 the run or a verification failed (or `plot` could not draw),
 //! 2 bad input (case file, paths, steps).
@@ -678,7 +679,7 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
         phases: Phases::split(t, output_s, wall_time_s),
         fits: sim.initial_solid_ratio().filter(|_| !curve.is_empty()).map(|d0| {
-            let names = ["left", "right", "bottom", "top"];
+            let names = mpfem::plot::WALLS;
             let of = if pressing.is_empty() { "every loaded wall".to_string() } else { pressing.iter().map(|&k| names[k]).collect::<Vec<_>>().join(", ") };
             mpfem::fits::fit(&curve, d0, of)
         }),

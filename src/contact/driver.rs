@@ -552,9 +552,10 @@ impl ContactProblem {
             let slave_node = dofs[0] / 2;
             self.trial_nodal.gap(slave_node, gap);
             if active && lambda > 0.0 {
-                let f: Vec<f64> = grad.iter().map(|g| -lambda * area * g).collect();
-                let nodes: Vec<usize> = dofs.iter().step_by(2).map(|d| d / 2).collect();
-                self.trial_nodal.force(&nodes, &f);
+                // the force on the node is minus its contribution −λ A ∇g to the internal force
+                for (&d, &g) in dofs.iter().zip(&grad) {
+                    self.trial_nodal.force[d / 2][d % 2] += lambda * area * g;
+                }
                 let share = match cand {
                     Candidate::Pair(q) => lambda * self.pairs[q].weight,
                     Candidate::Wall { .. } => 0.0,
