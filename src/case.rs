@@ -815,6 +815,7 @@ mod raw {
         pub ny: Option<i64>,
         pub shape: Option<String>,
         pub sides: Option<i64>,
+        pub orientation: Option<String>,
         pub arrangement: Option<String>,
         pub materials: Option<Vec<String>>,
         pub fractions: Option<Vec<f64>>,
@@ -2351,6 +2352,19 @@ impl Cx<'_> {
         };
         let material = |k: usize| names[assigned.get(k).copied().unwrap_or(0)].0.clone();
         let ix = key.trim_start_matches("grids[").trim_end_matches(']');
+        let angle0 = match g.orientation.as_deref() {
+            None => std::f64::consts::FRAC_PI_2,
+            Some(o) => {
+                let okey = format!("{key}.orientation");
+                if sides == 0 || sides == usize::MAX {
+                    return Err(self.err(&okey, format!("value \"{o}\": not allowed for shape \"{shape}\"; expected orientation only with shape = \"polygon\"")));
+                }
+                match self.choice(&okey, o, &["vertex", "flat"])? {
+                    "flat" => std::f64::consts::PI / sides as f64,
+                    _ => std::f64::consts::FRAC_PI_2,
+                }
+            }
+        };
         if sides == usize::MAX {
             let places = crate::packing::arranged_grid_ellipses(nx, ny, x1 - x0, y1 - y0, phi, arrangement).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
             return Ok(places
@@ -2366,7 +2380,7 @@ impl Cx<'_> {
                 })
                 .collect());
         }
-        let places = crate::packing::arranged_grid(nx, ny, x1 - x0, y1 - y0, phi, sides, arrangement).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
+        let places = crate::packing::oriented_grid(nx, ny, x1 - x0, y1 - y0, phi, sides, arrangement, angle0).map_err(|m| self.err(&format!("{key}.solid_ratio"), m))?;
         Ok(places
             .iter()
             .enumerate()
@@ -2375,7 +2389,7 @@ impl Cx<'_> {
                 let shape = if sides == 0 {
                     raw::Shape::disc(c, p.radius)
                 } else {
-                    raw::Shape::polygon(crate::packing::regular_polygon(c, p.radius, sides, std::f64::consts::FRAC_PI_2))
+                    raw::Shape::polygon(crate::packing::regular_polygon(c, p.radius, sides, angle0))
                 };
                 raw::Body::generated(format!("g{ix}_p{k}"), material(k), h, shape)
             })

@@ -7,7 +7,7 @@
 //! without touching while their circumscribed radius is below min(a, b)/2, i.e. for discs while
 //! φ < π/4 · min(a, b)/max(a, b) (0.785 for square cells).
 
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 pub mod overlap;
 pub mod random;
@@ -93,6 +93,25 @@ pub fn regular_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: 
 /// neighbours are a cell width away in its row and √(a²/4 + b²) in the next rows (cells a × b),
 /// and the walls are half a cell away, so the particles fit while 2r < min(a, b).
 pub fn arranged_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64, sides: usize, arrangement: Arrangement) -> Result<Vec<Placement>, String> {
+    oriented_grid(nx, ny, width, height, solid_ratio, sides, arrangement, FRAC_PI_2)
+}
+
+/// Half-extents `[hx, hy]` of a regular polygon of circumradius 1 whose first vertex is at
+/// angle `angle0` (radians); `[1, 1]` for a disc (`sides` = 0).
+pub fn polygon_half_extents(sides: usize, angle0: f64) -> [f64; 2] {
+    if sides == 0 {
+        return [1.0, 1.0];
+    }
+    regular_polygon([0.0, 0.0], 1.0, sides, angle0).iter().fold([0.0f64, 0.0f64], |m, v| [m[0].max(v[0].abs()), m[1].max(v[1].abs())])
+}
+
+/// [`arranged_grid`] with the polygons' first vertex at angle `angle0` (radians; π/2 is one
+/// vertex up, π/sides one side facing +x: an octagon then shows a flat side to each wall and
+/// fits up to 2/(1 + √2) ≈ 0.828 of a square cell instead of √2/2 ≈ 0.707). In a square
+/// arrangement the polygons fit while their bounding box fits their cell; in a hexagonal one
+/// while 2r < min(a, b) as in [`arranged_grid`].
+#[allow(clippy::too_many_arguments)]
+pub fn oriented_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio: f64, sides: usize, arrangement: Arrangement, angle0: f64) -> Result<Vec<Placement>, String> {
     check_grid(nx, ny, width, height, arrangement)?;
     if sides != 0 && sides < 3 {
         return Err(format!("sides = {sides}: expected 0 (disc) or at least 3"));
@@ -108,8 +127,16 @@ pub fn arranged_grid(nx: usize, ny: usize, width: f64, height: f64, solid_ratio:
         Arrangement::Square => (solid_ratio * a * b / unit).sqrt(),
         Arrangement::Hexagonal => (solid_ratio * width * height / (centres.len() as f64 * unit)).sqrt(),
     };
-    if 2.0 * r >= a.min(b) {
-        let max = centres.len() as f64 * unit * (0.5 * a.min(b)).powi(2) / (width * height);
+    // the largest radius that fits, and whether r is below it
+    let r_max = match arrangement {
+        Arrangement::Square => {
+            let [hx, hy] = polygon_half_extents(sides, angle0);
+            (0.5 * a / hx).min(0.5 * b / hy)
+        }
+        Arrangement::Hexagonal => 0.5 * a.min(b),
+    };
+    if r >= r_max {
+        let max = centres.len() as f64 * unit * r_max.powi(2) / (width * height);
         return Err(format!(
             "solid ratio {solid_ratio}: particles of radius {r:.4} mm do not fit in cells of {a:.4} x {b:.4} mm; a regular grid allows at most {max:.4}"
         ));
@@ -183,6 +210,26 @@ mod tests {
         assert!(e.contains("0.80") || e.contains("0.8"), "{e}");
         assert!(regular_grid(2, 2, 10.0, 10.0, 0.78, 0).is_ok());
         assert!(regular_grid(0, 2, 10.0, 10.0, 0.5, 0).is_err());
+    }
+
+    /// Octagons with a flat side up fill a square cell up to 2/(1 + √2) ≈ 0.8284 (closed form:
+    /// area 2√2 R², flat-to-flat width 2R cos(π/8)); vertex up only to √2/2 ≈ 0.7071. The
+    /// bounding box of the flat octagon at φ = 0.80 is inside its 250 mm cell, and 0.83 is refused.
+    #[test]
+    fn flat_octagons_fill_square_cells_to_their_closed_form_limit() {
+        let flat = PI / 8.0;
+        let p = oriented_grid(4, 4, 1000.0, 1000.0, 0.80, 8, Arrangement::Square, flat).unwrap();
+        let area: f64 = p.iter().map(|q| particle_area(8, q.radius)).sum();
+        assert!((area / 1e6 - 0.80).abs() < 1e-12);
+        let [hx, hy] = polygon_half_extents(8, flat);
+        assert!(((hx - (PI / 8.0).cos()).abs()) < 1e-15 && (hy - hx).abs() < 1e-15);
+        assert!(2.0 * hx * p[0].radius < 250.0);
+        let limit = 2.0 / (1.0 + 2f64.sqrt());
+        assert!(oriented_grid(4, 4, 1000.0, 1000.0, limit - 1e-9, 8, Arrangement::Square, flat).is_ok());
+        assert!(oriented_grid(4, 4, 1000.0, 1000.0, limit + 1e-9, 8, Arrangement::Square, flat).is_err());
+        let vertex_limit = 0.5 * 2f64.sqrt();
+        assert!(oriented_grid(1, 1, 1000.0, 1000.0, vertex_limit - 1e-9, 8, Arrangement::Square, FRAC_PI_2).is_ok());
+        assert!(arranged_grid(1, 1, 1000.0, 1000.0, vertex_limit + 1e-9, 8, Arrangement::Square).is_err());
     }
 
     /// The paper's 20-particle packing (4 × 5 in a 1000 mm die at φ = 0.65), impossible with

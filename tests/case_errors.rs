@@ -680,6 +680,36 @@ fn hexagonal_grids() {
     assert_has(&e, &["nx >= 2"]);
 }
 
+/// `[[grids]] orientation = "flat"`: octagons with a side facing each wall reach φ = 0.80 in a
+/// square grid (limit 2/(1 + √2) ≈ 0.828), vertex-up octagons do not (limit √2/2); the key is
+/// refused for discs and ellipses and an unknown value is named.
+#[test]
+fn flat_polygon_grids() {
+    let text = format!(
+        "{}\n[[walls]]\nside = \"left\"\nposition = 100.0\n[[walls]]\nside = \"right\"\nposition = 140.0\n[[walls]]\nside = \"bottom\"\nposition = 0.0\n[[walls]]\nside = \"top\"\nposition = 40.0\n\n[[grids]]\nmaterial = \"alu\"\nnx = 2\nny = 2\nshape = \"polygon\"\nsides = 8\norientation = \"flat\"\nsolid_ratio = 0.80\nmesh_size = 2.0\n",
+        BASE
+    );
+    let c = parse(&text).unwrap();
+    assert_eq!(c.bodies.len(), 1 + 4);
+    // flat sides up and to the right: the first vertex at 22.5 degrees, two vertices share
+    // the largest y (to round-off)
+    let v = match &c.bodies[1].shape {
+        mpfem::case::ShapeSpec::Polygon { vertices } => vertices.clone(),
+        other => panic!("expected a polygon, got {other:?}"),
+    };
+    let ymax = v.iter().map(|p| p[1]).fold(f64::MIN, f64::max);
+    assert_eq!(v.iter().filter(|p| (p[1] - ymax).abs() < 1e-9).count(), 2);
+    let e = err_of(&text.replace("orientation = \"flat\"\n", ""));
+    assert_eq!(e.key, "grids[0].solid_ratio");
+    assert_has(&e, &["at most 0.7071"]);
+    let e = err_of(&text.replace("\"flat\"", "\"edge\""));
+    assert_eq!(e.key, "grids[0].orientation");
+    assert_has(&e, &["\"edge\"", "\"vertex\", \"flat\""]);
+    let e = err_of(&text.replace("shape = \"polygon\"", "shape = \"ellipse\""));
+    assert_eq!(e.key, "grids[0].orientation");
+    assert_has(&e, &["not allowed for shape \"ellipse\""]);
+}
+
 /// `[[grids]]` mixtures: by pattern (checkerboard, rows, columns) or by fraction (shuffled by a
 /// seed, reproducibly); bad combinations name the key.
 #[test]
