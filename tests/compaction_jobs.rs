@@ -211,3 +211,28 @@ fn discs_2x2_lateral_three_methods_agree() {
     compare("lateral: Lagrange vs penalty", &lm, &pen, 0.02);
     compare("lateral: Lagrange vs augmented Lagrangian", &lm, &al, 0.02);
 }
+
+/// Incompressible particles (the paper's asphalt, ν = 0.5, creeping) in a 2 × 2 grid of flat-
+/// faced octagons pressed laterally from solid ratio 0.80 to 0.95. The issue asks for a volume
+/// error of at most 0.05 % on every incompressible run. The augmented Lagrangian volume
+/// constraint holds every element to `volume_tol` = 1e-10, so the total is held far tighter,
+/// to 1e-8 (measured 4.5e-11), to catch a regression long before the issue's bound. The
+/// set-up is symmetric: opposite walls carry the same pressure (1e-8, as the disc jobs).
+#[test]
+fn octagons_2x2_asphalt_lateral_conserve_area() {
+    let (sim, last, stop, _) = run_job("octagons_2x2_asphalt_lateral.toml");
+    assert_eq!(stop, "solid ratio reached");
+    assert!(last.solid_ratio >= 0.95, "{}", last.solid_ratio);
+    let areas = sim.model.body_areas(&sim.coords(&sim.sol.u));
+    let areas0 = sim.model.body_areas(&sim.model.x0);
+    let total = ((areas.iter().sum::<f64>() - areas0.iter().sum::<f64>()) / areas0.iter().sum::<f64>()).abs();
+    let worst = areas.iter().zip(&areas0).map(|(a, a0)| ((a - a0) / a0).abs()).fold(0.0, f64::max);
+    assert!(total < 1e-8 && worst < 1e-8, "volume error {total:.3e}, worst particle {worst:.3e}");
+    assert!(last.pressure[0] > 50.0, "the side walls must be loaded: {:?}", last.pressure);
+    for (a, b) in [(0, 1), (2, 3)] {
+        let (pa, pb) = (last.pressure[a], last.pressure[b]);
+        assert!((pa - pb).abs() <= SYMMETRY_TOL * pa.abs().max(pb.abs()), "walls {a}/{b}: {pa} vs {pb} MPa");
+    }
+    let ratio = last.stabilisation_energy / last.external_work;
+    assert!(ratio < 0.01, "stabilisation work {ratio:.3e} of the external work");
+}
