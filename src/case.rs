@@ -207,6 +207,9 @@ pub struct ContactSpec {
     pub stabilise: Stabilise,
     /// Where the stabilisation springs are anchored.
     pub stabilisation_kind: StabilisationKind,
+    /// Retry a step that fails with the inertial anchor at the same size with the viscous one
+    /// before cutting back.
+    pub viscous_retry: bool,
     /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
     /// steadies the Newton iterations of weakly held particles without changing the solution
     /// or dissipating energy.
@@ -230,6 +233,7 @@ impl Default for ContactSpec {
             stabilisation: 1e-5,
             stabilise: Stabilise::All,
             stabilisation_kind: StabilisationKind::Inertial,
+            viscous_retry: false,
             regularisation: 0.0,
             search_distance: None,
             lagrange_regularisation: 1e-4,
@@ -802,6 +806,7 @@ mod raw {
         pub stabilisation: Option<f64>,
         pub stabilise: Option<String>,
         pub stabilisation_kind: Option<String>,
+        pub viscous_retry: Option<bool>,
         pub regularisation: Option<f64>,
         pub search_distance: Option<f64>,
         pub lagrange_regularisation: Option<f64>,
@@ -2118,6 +2123,12 @@ impl Cx<'_> {
                 "viscous" => StabilisationKind::Viscous,
                 _ => StabilisationKind::Inertial,
             };
+        }
+        if let Some(v) = c.viscous_retry {
+            if v && spec.stabilisation_kind != StabilisationKind::Inertial {
+                return Err(self.err("contact.viscous_retry", "value true: the springs are viscous already; expected viscous_retry only with stabilisation_kind = \"inertial\""));
+            }
+            spec.viscous_retry = v;
         }
         if let Some(v) = c.regularisation {
             spec.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;

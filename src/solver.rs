@@ -191,6 +191,9 @@ pub struct Simulation {
     node_body: Vec<usize>,
     /// Stabilise every dof in the current step (a retry after a failure).
     stab_all: bool,
+    /// Anchor the springs at the last converged position in the current step, whatever
+    /// `stabilisation_kind` says (a retry after a failure with the inertial anchor).
+    stab_viscous: bool,
     /// Where the stabilisation springs of the current step are anchored.
     stab_anchor: Vec<f64>,
     /// Tangent-only regularisation per dof (N/mm²).
@@ -328,6 +331,7 @@ impl Simulation {
             node_body,
             stab_all: false,
             stab_anchor: vec![0.0; n_dofs],
+            stab_viscous: false,
             reg_k,
             contact_stats: ContactStats::default(),
             stab_energy: 0.0,
@@ -475,20 +479,33 @@ impl Simulation {
                 c.restore(snap.clone());
             }
             let result = self.try_step(dt_try);
-            let partial = self.contact.is_some() && !self.stab_all && self.model.contact.stabilise == Stabilise::Unsupported;
+            let stabilised = self.contact.is_some() && self.model.contact.stabilisation > 0.0;
+            let partial = stabilised && !self.stab_all && self.model.contact.stabilise == Stabilise::Unsupported;
+            let inertial = stabilised && !self.stab_viscous && self.model.contact.viscous_retry && self.model.contact.stabilisation_kind == StabilisationKind::Inertial;
             match result {
                 Ok(trial) => {
                     self.stab_all = false;
+                    self.stab_viscous = false;
                     return Ok(self.commit(dt_try, trial, cutbacks));
                 }
-                Err(cause) if partial && self.model.contact.stabilisation > 0.0 => {
+                Err(cause) if partial => {
                     // retry the same step with every dof stabilised before cutting back
                     tracing::debug!(time = self.sol.time, dt = dt_try, %cause, "step failed with partial stabilisation, retrying with all");
                     self.stab_all = true;
                     cutbacks += 1;
                     self.total_cutbacks += 1;
                 }
+                Err(cause) if inertial => {
+                    // retry the same step with the springs anchored where the step starts: a
+                    // particle that hits another at rest must change its velocity at once, which
+                    // the inertial anchor resists and the viscous one does not
+                    tracing::debug!(time = self.sol.time, dt = dt_try, %cause, "step failed with inertial stabilisation, retrying viscous");
+                    self.stab_viscous = true;
+                    cutbacks += 1;
+                    self.total_cutbacks += 1;
+                }
                 Err(cause) => {
+                    // (a retry's wider or viscous springs stay on for the cut-back steps)
                     cutbacks += 1;
                     self.total_cutbacks += 1;
                     let next = dt_try * self.time.cutback;
@@ -669,7 +686,7 @@ impl Simulation {
                 }
             }
             // anchor of the springs: the last converged position, or its extrapolation
-            let inertial = self.model.contact.stabilisation_kind == StabilisationKind::Inertial;
+            let inertial = self.model.contact.stabilisation_kind == StabilisationKind::Inertial && !self.stab_viscous;
             let s = if inertial && self.dt_prev > 0.0 { dt / self.dt_prev } else { 0.0 };
             for d in 0..self.stab_anchor.len() {
                 self.stab_anchor[d] = self.sol.u[d] + s * (self.sol.u[d] - self.u_prev[d]);

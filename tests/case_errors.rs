@@ -570,6 +570,17 @@ fn lagrange_regularisation_is_checked_and_defaults_to_1e_4() {
     }
 }
 
+/// `[contact] viscous_retry` is off by default, on when asked, and refused with viscous springs
+/// (which it would not change), naming the key and the value.
+#[test]
+fn viscous_retry_defaults_off_and_needs_inertial_springs() {
+    assert!(!parse(BASE).unwrap().contact.viscous_retry);
+    assert!(parse(&format!("{BASE}\n[contact]\nviscous_retry = true\n")).unwrap().contact.viscous_retry);
+    let e = err_of(&format!("{BASE}\n[contact]\nstabilisation_kind = \"viscous\"\nviscous_retry = true\n"));
+    assert_eq!(e.key, "contact.viscous_retry");
+    assert_has(&e, &["value true", "stabilisation_kind = \"inertial\""]);
+}
+
 /// Overlapping particles are an input error at the later body, naming both bodies, the depth
 /// and the expectation: exact for two discs, GJK plus a projection search for polygons and
 /// ellipses; touching particles are accepted.
