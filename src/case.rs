@@ -284,7 +284,10 @@ impl BodySpec {
         t.insert("name".into(), self.name.clone().into());
         let material = materials.get(self.material).map_or_else(String::new, |m| m.name.clone());
         t.insert("material".into(), material.into());
-        t.insert("mesh_size".into(), self.mesh_size.into());
+        // a gmsh body's element size comes from its mesh (mesh_size is not allowed there)
+        if !matches!(self.shape, ShapeSpec::Gmsh { .. }) {
+            t.insert("mesh_size".into(), self.mesh_size.into());
+        }
         if let Some([a, b]) = self.divisions {
             t.insert("divisions".into(), toml::Value::Array(vec![(a as i64).into(), (b as i64).into()]));
         }
@@ -323,6 +326,16 @@ impl ShapeSpec {
                 t.insert("outer_radius".into(), (*outer_radius).into());
                 t.insert("angles".into(), pair(*angles_deg));
             }
+            ShapeSpec::Outline { vertices } => {
+                t.insert("vertices".into(), toml::Value::Array(vertices.iter().map(|v| pair(*v)).collect()));
+            }
+            ShapeSpec::Gmsh { file, group, scale, offset, .. } => {
+                // absolute (see Cx::gmsh_shape), so the table stays valid wherever it is written
+                t.insert("file".into(), file.display().to_string().into());
+                t.insert("group".into(), group.clone().into());
+                t.insert("scale".into(), (*scale).into());
+                t.insert("offset".into(), pair(*offset));
+            }
         }
         t
     }
@@ -355,6 +368,22 @@ pub enum ShapeSpec {
         outer_radius: f64,
         angles_deg: [f64; 2],
     },
+    /// Any simple polygon (possibly non-convex), meshed by
+    /// [`crate::mesh::polygon::simple_polygon`].
+    Outline {
+        vertices: Vec<[f64; 2]>,
+    },
+    /// One 2D physical group of a gmsh file (see [`crate::mesh::import`]), scaled by `scale`
+    /// about the origin and then shifted by `offset`; `mesh` is the group's mesh so placed.
+    Gmsh {
+        /// The file, resolved against the case file's directory (absolute).
+        file: PathBuf,
+        /// The group's physical name, or its tag (decimal) when it has no name.
+        group: String,
+        scale: f64,
+        offset: [f64; 2],
+        mesh: std::sync::Arc<crate::mesh::Mesh>,
+    },
 }
 
 impl ShapeSpec {
@@ -367,6 +396,8 @@ impl ShapeSpec {
             ShapeSpec::Polygon { .. } => "polygon",
             ShapeSpec::Cook => "cook",
             ShapeSpec::AnnulusSector { .. } => "annulus_sector",
+            ShapeSpec::Outline { .. } => "outline",
+            ShapeSpec::Gmsh { .. } => "gmsh",
         }
     }
 
@@ -377,6 +408,7 @@ impl ShapeSpec {
                 &["left", "right", "bottom", "top", "boundary"]
             }
             ShapeSpec::Disc { .. } | ShapeSpec::Ellipse { .. } => &["outer", "boundary"],
+            ShapeSpec::Outline { .. } | ShapeSpec::Gmsh { .. } => &["boundary"],
             ShapeSpec::AnnulusSector { .. } => &["inner", "outer", "start", "end", "boundary"],
             ShapeSpec::Polygon { vertices } => {
                 let mut v = vec!["boundary".to_string()];
@@ -387,8 +419,9 @@ impl ShapeSpec {
         names.iter().map(|s| s.to_string()).collect()
     }
 
-    /// The convex outline used by the overlap check; `None` for an annulus sector (not
-    /// convex, not checked). A polygon stands for the convex hull of its vertices.
+    /// The convex outline used by the overlap check; `None` for the shapes that are not convex
+    /// (annulus sector, outline, gmsh; see [`ShapeSpec::particle`]). A polygon stands for the
+    /// convex hull of its vertices.
     pub fn convex(&self) -> Option<crate::packing::overlap::Convex> {
         use crate::packing::overlap::Convex;
         Some(match self {
@@ -397,8 +430,27 @@ impl ShapeSpec {
             ShapeSpec::Polygon { vertices } => Convex::Polygon(vertices.clone()),
             ShapeSpec::Rectangle { origin: o, size: s } => Convex::Polygon(vec![*o, [o[0] + s[0], o[1]], [o[0] + s[0], o[1] + s[1]], [o[0], o[1] + s[1]]]),
             ShapeSpec::Cook => Convex::Polygon(vec![[0.0, 0.0], [48.0, 44.0], [48.0, 60.0], [0.0, 44.0]]),
-            ShapeSpec::AnnulusSector { .. } => return None,
+            ShapeSpec::AnnulusSector { .. } | ShapeSpec::Outline { .. } | ShapeSpec::Gmsh { .. } => return None,
         })
+    }
+
+    /// The particle outline used by the overlap check: [`ShapeSpec::convex`] for the convex
+    /// shapes, the polygon of an outline, and the outer boundary loop of a gmsh mesh (holes are
+    /// ignored); `None` for an annulus sector (not checked).
+    pub fn particle(&self) -> Option<crate::packing::overlap::Particle> {
+        use crate::packing::overlap::Particle;
+        match self {
+            ShapeSpec::Outline { vertices } => Some(Particle::Simple(vertices.clone())),
+            ShapeSpec::Gmsh { mesh, .. } => {
+                let outer = mesh
+                    .boundary_loops()
+                    .into_iter()
+                    .map(|l| l.iter().map(|&i| mesh.nodes[i]).collect::<Vec<_>>())
+                    .max_by(|a, b| crate::mesh::polygon_area(a.iter().copied()).total_cmp(&crate::mesh::polygon_area(b.iter().copied())))?;
+                Some(Particle::Simple(outer))
+            }
+            _ => self.convex().map(Particle::Convex),
+        }
     }
 
     /// Centre for radial displacements (disc, ellipse, annulus sector); `None` otherwise.
@@ -685,6 +737,7 @@ pub fn parse(text: &str, base_dir: &Path) -> Result<Case, CaseError> {
     let cx = Cx {
         loc: &loc,
         base_dir,
+        msh_cache: Default::default(),
     };
     cx.case(raw)
 }
@@ -757,7 +810,21 @@ mod raw {
         pub contact: Option<ContactRaw>,
         pub grids: Option<Vec<GridRaw>>,
         pub packings: Option<Vec<PackingRaw>>,
+        pub imports: Option<Vec<ImportRaw>>,
         pub stop: Option<StopRaw>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct ImportRaw {
+        pub file: Option<String>,
+        pub material: Option<String>,
+        pub materials: Option<Vec<String>>,
+        pub fractions: Option<Vec<f64>>,
+        pub seed: Option<i64>,
+        pub mesh_size: Option<f64>,
+        pub scale: Option<f64>,
+        pub offset: Option<P2>,
     }
 
     #[derive(Deserialize)]
@@ -852,7 +919,17 @@ mod raw {
                 inner_radius: None,
                 outer_radius: None,
                 angles: None,
+                file: None,
+                group: None,
+                scale: None,
+                offset: None,
             }
+        }
+        pub fn outline(vertices: Vec<[f64; 2]>) -> Self {
+            Self { vertices: Some(vertices.into_iter().map(Pair).collect()), ..Self::empty("outline") }
+        }
+        pub fn gmsh(file: String, group: String, scale: f64, offset: [f64; 2]) -> Self {
+            Self { file: Some(file), group: Some(group), scale: Some(scale), offset: Some(Pair(offset)), ..Self::empty("gmsh") }
         }
         pub fn disc(center: [f64; 2], radius: f64) -> Self {
             Self { center: Some(Pair(center)), radius: Some(radius), ..Self::empty("disc") }
@@ -878,6 +955,10 @@ mod raw {
     impl Body {
         pub fn generated(name: String, material: String, mesh_size: f64, shape: Shape) -> Self {
             Self { name: Some(name), material: Some(material), mesh_size: Some(mesh_size), divisions: None, shape: Some(shape) }
+        }
+        /// A body whose element size comes from its (imported) mesh.
+        pub fn imported(name: String, material: String, shape: Shape) -> Self {
+            Self { name: Some(name), material: Some(material), mesh_size: None, divisions: None, shape: Some(shape) }
         }
     }
 
@@ -949,6 +1030,10 @@ mod raw {
         pub inner_radius: Option<f64>,
         pub outer_radius: Option<f64>,
         pub angles: Option<P2>,
+        pub file: Option<String>,
+        pub group: Option<String>,
+        pub scale: Option<f64>,
+        pub offset: Option<P2>,
     }
 
     #[derive(Deserialize)]
@@ -1125,6 +1210,8 @@ fn toml_error(text: &str, loc: Option<&Locator>, e: &toml::de::Error) -> CaseErr
 struct Cx<'a> {
     loc: &'a Locator<'a>,
     base_dir: &'a Path,
+    /// gmsh files read so far (a file with many particles is parsed once).
+    msh_cache: std::cell::RefCell<HashMap<PathBuf, std::rc::Rc<Vec<crate::mesh::import::MshParticle>>>>,
 }
 
 fn join_names<'s>(names: impl IntoIterator<Item = &'s str>) -> String {
@@ -1337,10 +1424,13 @@ impl Cx<'_> {
         for (i, p) in r.packings.unwrap_or_default().into_iter().enumerate() {
             raw_bodies.extend(self.packing(&format!("packings[{i}]"), i, p, &walls, &materials)?);
         }
+        for (i, imp) in r.imports.unwrap_or_default().into_iter().enumerate() {
+            raw_bodies.extend(self.import(&format!("imports[{i}]"), i, imp, &materials)?);
+        }
         if raw_bodies.is_empty() {
             return Err(self.err(
                 "bodies",
-                "no body defined; expected at least one [[bodies]] table with name, material, mesh_size and shape",
+                "no body defined; expected at least one [[bodies]] table with name, material, mesh_size and shape (or [[grids]], [[packings]], [[imports]])",
             ));
         }
         let mut bodies: Vec<BodySpec> = Vec::with_capacity(raw_bodies.len());
@@ -1802,6 +1892,18 @@ impl Cx<'_> {
             }
         };
         let hkey = format!("{key}.mesh_size");
+        if let ShapeSpec::Gmsh { mesh, .. } = &shape {
+            if let Some(h) = b.mesh_size {
+                return Err(self.err(
+                    &hkey,
+                    format!("value {h:?}: not allowed for shape type \"gmsh\" (the elements come from the file); expected no mesh_size"),
+                ));
+            }
+            // the element size of the imported mesh: the side of a square of its mean element area
+            let n = mesh.n_elements().max(1) as f64;
+            let mesh_size = (mesh.area(&mesh.nodes).abs() / n).sqrt();
+            return Ok(BodySpec { name, material, shape, mesh_size, divisions });
+        }
         let mesh_size = match (b.mesh_size, divisions) {
             (Some(h), _) => self.positive(&hkey, h, "a target element edge length h (mm)")?,
             (None, Some(d)) => implied_mesh_size(&shape, d),
@@ -1826,7 +1928,7 @@ impl Cx<'_> {
         let kind = self.req(
             s.kind.clone(),
             &tkey,
-            "\"rectangle\", \"disc\", \"ellipse\", \"polygon\", \"cook\" or \"annulus_sector\"",
+            "\"rectangle\", \"disc\", \"ellipse\", \"polygon\", \"outline\", \"gmsh\", \"cook\" or \"annulus_sector\"",
         )?;
         let kind = self.choice(
             &tkey,
@@ -1836,6 +1938,8 @@ impl Cx<'_> {
                 "disc",
                 "ellipse",
                 "polygon",
+                "outline",
+                "gmsh",
                 "cook",
                 "annulus_sector",
             ],
@@ -1844,7 +1948,8 @@ impl Cx<'_> {
             "rectangle" => &["origin", "size"],
             "disc" => &["center", "radius"],
             "ellipse" => &["center", "semi_axes", "angle"],
-            "polygon" => &["vertices"],
+            "polygon" | "outline" => &["vertices"],
+            "gmsh" => &["file", "group", "scale", "offset"],
             "cook" => &[],
             _ => &["center", "inner_radius", "outer_radius", "angles"],
         };
@@ -1859,6 +1964,10 @@ impl Cx<'_> {
             ("inner_radius", s.inner_radius.is_some()),
             ("outer_radius", s.outer_radius.is_some()),
             ("angles", s.angles.is_some()),
+            ("file", s.file.is_some()),
+            ("group", s.group.is_some()),
+            ("scale", s.scale.is_some()),
+            ("offset", s.offset.is_some()),
         ];
         for (field, is) in present {
             if is && !allowed.contains(&field) {
@@ -1973,6 +2082,21 @@ impl Cx<'_> {
                 ShapeSpec::Polygon { vertices }
             }
             "cook" => ShapeSpec::Cook,
+            "outline" => {
+                let vkey = format!("{key}.vertices");
+                let vertices: Vec<[f64; 2]> = self
+                    .req(s.vertices, &vkey, "at least 3 vertices [[x0, y0], [x1, y1], ...] (mm) of a simple polygon")?
+                    .into_iter()
+                    .map(|p| p.0)
+                    .collect();
+                for (i, v) in vertices.iter().enumerate() {
+                    self.finite2(&format!("{vkey}[{i}]"), *v, "a finite vertex coordinate (mm)")?;
+                }
+                crate::mesh::polygon::check_simple_polygon(&vertices)
+                    .map_err(|e| self.err(&vkey, format!("{} vertices: {e}; expected a simple polygon (sides that neither cross nor touch)", vertices.len())))?;
+                ShapeSpec::Outline { vertices }
+            }
+            "gmsh" => self.gmsh_shape(key, s)?,
             _ => {
                 let center = center(self)?;
                 let ikey = format!("{key}.inner_radius");
@@ -2150,8 +2274,8 @@ impl Cx<'_> {
         if bodies.len() < 2 {
             return Ok(());
         }
-        let shapes: Vec<_> = bodies.iter().map(|b| b.shape.convex()).collect();
-        let Some(o) = crate::packing::overlap::overlapping_pairs(&shapes, 1e-9).into_iter().next() else {
+        let shapes: Vec<_> = bodies.iter().map(|b| b.shape.particle()).collect();
+        let Some(o) = crate::packing::overlap::overlapping_particles(&shapes, 1e-9).into_iter().next() else {
             return Ok(());
         };
         let (a, b) = (&bodies[o.first], &bodies[o.second]);
@@ -2303,6 +2427,119 @@ impl Cx<'_> {
                 raw::Body::generated(format!("r{index}_p{j}"), material, h, raw::Shape::from_convex(part.shape))
             })
             .collect())
+    }
+
+    /// The particles of a gmsh file (read once per file).
+    fn msh(&self, key: &str, path: &Path) -> Result<std::rc::Rc<Vec<crate::mesh::import::MshParticle>>, CaseError> {
+        if let Some(m) = self.msh_cache.borrow().get(path) {
+            return Ok(m.clone());
+        }
+        let bytes = std::fs::read(path).map_err(|e| self.err(key, format!("cannot read gmsh file \"{}\": {e}", path.display())))?;
+        let parts = crate::mesh::import::read_msh(&bytes).map_err(|e| self.err(key, format!("in gmsh file \"{}\": {e}", path.display())))?;
+        let parts = std::rc::Rc::new(parts);
+        self.msh_cache.borrow_mut().insert(path.to_path_buf(), parts.clone());
+        Ok(parts)
+    }
+
+    /// `scale` (default 1) and `offset` (default [0, 0]) of an import or a gmsh shape.
+    fn placement(&self, key: &str, scale: Option<f64>, offset: Option<raw::P2>) -> Result<(f64, [f64; 2]), CaseError> {
+        let scale = match scale {
+            None => 1.0,
+            Some(v) => self.positive(&format!("{key}.scale"), v, "a scale factor")?,
+        };
+        let offset = self.finite2(&format!("{key}.offset"), offset.map_or([0.0, 0.0], |p| p.0), "a finite shift (mm)")?;
+        Ok((scale, offset))
+    }
+
+    /// `shape = { type = "gmsh", file, group, scale, offset }`.
+    fn gmsh_shape(&self, key: &str, s: raw::Shape) -> Result<ShapeSpec, CaseError> {
+        let fkey = format!("{key}.file");
+        let file = self.req(s.file, &fkey, "the path of a gmsh .msh file (relative to the case file)")?;
+        // absolute, so that a case written elsewhere (mpfem pack) refers to the same file
+        let path = self.base_dir.join(&file);
+        let path = std::path::absolute(&path).unwrap_or(path);
+        let parts = self.msh(&fkey, &path)?;
+        let (scale, offset) = self.placement(key, s.scale, s.offset)?;
+        let label = |p: &crate::mesh::import::MshParticle| p.name.clone().unwrap_or_else(|| p.tag.to_string());
+        let known = || {
+            let tags: Vec<String> = parts.iter().map(|p| p.tag.to_string()).collect();
+            format!("{}; tags {}", join_names(parts.iter().filter_map(|p| p.name.as_deref())), tags.join(", "))
+        };
+        let gkey = format!("{key}.group");
+        let part = match s.group {
+            Some(g) => parts
+                .iter()
+                .find(|p| p.name.as_deref() == Some(g.as_str()))
+                .or_else(|| parts.iter().find(|p| p.tag.to_string() == g))
+                .ok_or_else(|| self.err(&gkey, format!("value \"{g}\": gmsh file \"{}\" has no 2D physical group named or tagged \"{g}\" (names: {})", path.display(), known())))?,
+            None if parts.len() == 1 => &parts[0],
+            None => return Err(self.missing(&gkey, &format!("the physical group (name or tag) of the particle: gmsh file \"{}\" has {} (names: {})", path.display(), parts.len(), known()))),
+        };
+        let mut mesh = part.mesh.clone();
+        for p in &mut mesh.nodes {
+            *p = [scale * p[0] + offset[0], scale * p[1] + offset[1]];
+        }
+        Ok(ShapeSpec::Gmsh { file: path, group: label(part), scale, offset, mesh: std::sync::Arc::new(mesh) })
+    }
+
+    /// Expand an `[[imports]]` entry into raw bodies: the particles of an outline CSV file
+    /// (named `i{index}_p{k}`, k the particle's block in the file) or of a gmsh file (named by
+    /// their physical name, or `i{index}_g{tag}` without one).
+    fn import(&self, key: &str, index: usize, imp: raw::ImportRaw, materials: &[MaterialSpec]) -> Result<Vec<raw::Body>, CaseError> {
+        let k = |field: &str| format!("{key}.{field}");
+        let file = self.req(imp.file, &k("file"), "the path of an outline CSV file (.csv) or a gmsh file (.msh), relative to the case file")?;
+        let path = self.base_dir.join(&file);
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+        let ext = match ext.as_str() {
+            "csv" | "msh" => ext,
+            _ => return Err(self.err(&k("file"), format!("value \"{file}\": unknown file type; expected a .csv outline file or a .msh gmsh file"))),
+        };
+        let names = self.material_list(key, imp.material, imp.materials, materials)?;
+        let fractions = self.fractions(key, imp.fractions, names.len())?;
+        let seed = match imp.seed {
+            None => 0,
+            Some(v) => self.count(&k("seed"), v, 0)? as u64,
+        };
+        let (scale, offset) = self.placement(key, imp.scale, imp.offset)?;
+        let material_of = |count: usize| -> Vec<String> {
+            crate::packing::random::mixture(seed, count, &fractions).into_iter().map(|m| names[m.min(names.len() - 1)].0.clone()).collect()
+        };
+        if ext == "csv" {
+            let h = self.req(imp.mesh_size, &k("mesh_size"), "an element size in mm (the outlines are meshed with it)")?;
+            let h = self.positive(&k("mesh_size"), h, "an element size in mm")?;
+            let text = std::fs::read_to_string(&path).map_err(|e| self.err(&k("file"), format!("cannot read outline file \"{}\": {e}", path.display())))?;
+            let outlines = crate::mesh::import::read_outlines_csv(&text).map_err(|e| self.err(&k("file"), format!("in \"{}\", {e}", path.display())))?;
+            let mats = material_of(outlines.len());
+            return Ok(outlines
+                .into_iter()
+                .zip(mats)
+                .enumerate()
+                .map(|(j, (o, m))| {
+                    let v = o.vertices.iter().map(|p| [scale * p[0] + offset[0], scale * p[1] + offset[1]]).collect();
+                    raw::Body::generated(format!("i{index}_p{j}"), m, h, raw::Shape::outline(v))
+                })
+                .collect());
+        }
+        if let Some(h) = imp.mesh_size {
+            return Err(self.err(&k("mesh_size"), format!("value {h:?}: not allowed for a gmsh file (the elements come from the file); expected no mesh_size")));
+        }
+        let parts = self.msh(&k("file"), &path)?;
+        let mats = material_of(parts.len());
+        let mut out = Vec::with_capacity(parts.len());
+        for (p, m) in parts.iter().zip(mats) {
+            let (name, group) = match &p.name {
+                Some(n) if valid_body_name(n) => (n.clone(), n.clone()),
+                Some(_) => {
+                    return Err(self.err(
+                        &k("file"),
+                        format!("in gmsh file \"{}\": {}: the name is not a valid body name; expected ASCII letters, digits, '_' and '-' (rename the physical group)", path.display(), p.describe()),
+                    ))
+                }
+                None => (format!("i{index}_g{}", p.tag), p.tag.to_string()),
+            };
+            out.push(raw::Body::imported(name, m, raw::Shape::gmsh(file.clone(), group, scale, offset)));
+        }
+        Ok(out)
     }
 
     /// Expand a `[[grids]]` entry into raw bodies named `g{i}_p{k}` inside the die of the walls.

@@ -3,7 +3,7 @@
 //! ```text
 //! mpfem run [CASE.toml] [--out DIR]   run a case (no case: the built-in default job)
 //! mpfem check CASE.toml               validate a case without running it
-//! mpfem pack CASE.toml [--out DIR]    expand grids and packings: DIR/packed.toml, packing.png
+//! mpfem pack CASE.toml [--out DIR]    expand grids, packings, imports: DIR/packed.toml, packing.png
 //! mpfem verify                        run the verification set and print the table
 //! mpfem plot DIR [--compare DIR2 ...]  redraw the plots of a results folder
 //! mpfem study STUDY.toml [--out DIR]  several runs of a case side by side: one plot, one table
@@ -76,8 +76,9 @@ enum Command {
         #[arg(short, long)]
         out: Option<PathBuf>,
     },
-    /// Expand the particle grids and random packings of a case: write DIR/packed.toml (the
-    /// case with every [[grids]] and [[packings]] entry replaced by its [[bodies]]) and
+    /// Expand the particle grids, random packings and imported particles of a case: write
+    /// DIR/packed.toml (the case with every [[grids]], [[packings]] and [[imports]] entry
+    /// replaced by its [[bodies]]) and
     /// DIR/packing.png (a preview), and print the particle count and the solid ratio.
     Pack {
         /// The TOML case file.
@@ -220,7 +221,7 @@ fn main() -> ExitCode {
     }
 }
 
-/// `mpfem pack`: expand the case's grids and packings into bodies, write them as a case file
+/// `mpfem pack`: expand the case's grids, packings and imports into bodies, write them as a case file
 /// and a preview.
 /// `mpfem study`: every run in its own folder, at most `parallel` at once (one thread each),
 /// then the overlay plot and the table of final values.
@@ -383,6 +384,7 @@ fn write_packing(case_path: &Path, c: &Case, out: &Path) -> anyhow::Result<()> {
     let mut table: toml::Table = text.parse().with_context(|| format!("cannot parse {}", case_path.display()))?;
     table.remove("grids");
     table.remove("packings");
+    table.remove("imports");
     // the written case lives elsewhere: hardening tables given by a relative path are pointed
     // at the original file
     let base = case_path.parent().unwrap_or(Path::new("."));
@@ -402,18 +404,18 @@ fn write_packing(case_path: &Path, c: &Case, out: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let packed = out.join("packed.toml");
     let header = format!(
-        "# Written by `mpfem pack` from {}: the case with its [[grids]] and [[packings]] replaced by\n# the [[bodies]] they generate (hardening table files by absolute path).\n\n",
+        "# Written by `mpfem pack` from {}: the case with its [[grids]], [[packings]] and [[imports]]\n# replaced by the [[bodies]] they generate (hardening table and gmsh files by absolute path).\n\n",
         case_path.display()
     );
     std::fs::write(&packed, header + &body).with_context(|| format!("cannot write {}", packed.display()))?;
 
     let die = case::die_of(&c.walls);
-    let area: f64 = c.bodies.iter().filter_map(|b| b.shape.convex()).map(|s| s.area()).sum();
+    let area: f64 = c.bodies.iter().filter_map(|b| b.shape.particle()).map(|s| s.area()).sum();
     let ratio = die.map(|d| area / ((d[1] - d[0]) * (d[3] - d[2])));
     let particles: Vec<mpfem::plot::PreviewParticle> = c
         .bodies
         .iter()
-        .filter_map(|b| b.shape.convex().map(|s| mpfem::plot::PreviewParticle { outline: s.outline(96), material: b.material }))
+        .filter_map(|b| b.shape.particle().map(|s| mpfem::plot::PreviewParticle { outline: s.outline(96), material: b.material }))
         .collect();
     let names: Vec<String> = c.materials.iter().map(|m| m.name.clone()).collect();
     let mut title = vec![if c.title.is_empty() { case_path.display().to_string() } else { c.title.clone() }];

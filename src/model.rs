@@ -93,6 +93,8 @@ pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
         ShapeSpec::Disc { center, radius } => shapes::disc(*center, *radius, h),
         ShapeSpec::Ellipse { center, semi_axes, angle_deg } => shapes::ellipse(*center, *semi_axes, *angle_deg, h),
         ShapeSpec::Polygon { vertices } => shapes::convex_polygon(vertices, h).map_err(|e| e.to_string())?,
+        ShapeSpec::Outline { vertices } => crate::mesh::polygon::simple_polygon(vertices, h).map_err(|e| e.to_string())?,
+        ShapeSpec::Gmsh { mesh, .. } => (**mesh).clone(),
         ShapeSpec::AnnulusSector { center, inner_radius, outer_radius, angles_deg } => {
             let arc = 0.5 * (inner_radius + outer_radius) * (angles_deg[1] - angles_deg[0]).abs().to_radians();
             shapes::annulus_sector(

@@ -3,8 +3,12 @@
 //! Every body is meshed on its own. The generators in [`shapes`] build all-quadrilateral
 //! meshes (so the mean-dilatation Q1/P0 element never meets a locking triangle) of discs,
 //! ellipses, convex polygons, rectangles, annulus sectors and Cook's membrane, with a target
-//! element size `h` (mm). [`quality`] gives the usual quality measures.
+//! element size `h` (mm); [`polygon::simple_polygon`] meshes any simple (possibly non-convex)
+//! polygon, and [`import`] reads particles from files (polygon outlines in CSV, gmsh `.msh`
+//! meshes). [`quality`] gives the usual quality measures.
 
+pub mod import;
+pub mod polygon;
 pub mod quality;
 pub mod shapes;
 
@@ -53,6 +57,57 @@ impl Mesh {
     /// Total signed area of the mesh for the given nodal coordinates (mm²).
     pub fn area(&self, coords: &[[f64; 2]]) -> f64 {
         (0..self.elements.len()).map(|e| self.element_area(e, coords)).sum()
+    }
+
+    /// A mesh from nodes and counter-clockwise quadrilaterals: the boundary is every element
+    /// edge used by one element only, with the element's orientation (body on the left),
+    /// chained head to tail (closed loops, each starting at its smallest node); the only edge
+    /// set is `"boundary"`.
+    pub fn from_quads(nodes: Vec<[f64; 2]>, elements: Vec<[usize; 4]>) -> Mesh {
+        let mut count: std::collections::HashMap<[usize; 2], usize> = std::collections::HashMap::new();
+        for el in &elements {
+            for k in 0..4 {
+                let (a, b) = (el[k], el[(k + 1) % 4]);
+                *count.entry([a.min(b), a.max(b)]).or_insert(0) += 1;
+            }
+        }
+        let mut boundary = Vec::new();
+        for el in &elements {
+            for k in 0..4 {
+                let (a, b) = (el[k], el[(k + 1) % 4]);
+                if count[&[a.min(b), a.max(b)]] == 1 {
+                    boundary.push([a, b]);
+                }
+            }
+        }
+        let boundary = shapes::chain(boundary);
+        let mut edge_sets = BTreeMap::new();
+        edge_sets.insert("boundary".to_string(), boundary.clone());
+        Mesh { nodes, elements, boundary, edge_sets }
+    }
+
+    /// The closed loops of [`Mesh::boundary`] as node index lists (each loop once, without
+    /// repeating its first node), in the order of `boundary`. An open chain (not expected in a
+    /// valid mesh) is returned as it is.
+    pub fn boundary_loops(&self) -> Vec<Vec<usize>> {
+        let mut loops: Vec<Vec<usize>> = Vec::new();
+        let mut current: Vec<usize> = Vec::new();
+        for (k, e) in self.boundary.iter().enumerate() {
+            if current.is_empty() {
+                current.push(e[0]);
+            }
+            let closes = e[1] == current[0];
+            let next_starts_here = self.boundary.get(k + 1).is_some_and(|n| n[0] == e[1]);
+            if closes || !next_starts_here {
+                if !closes {
+                    current.push(e[1]);
+                }
+                loops.push(std::mem::take(&mut current));
+            } else {
+                current.push(e[1]);
+            }
+        }
+        loops
     }
 }
 

@@ -34,6 +34,10 @@ pub enum MeshError {
     NotConvex(usize),
     #[error("target element size h must be positive and finite, got {0}")]
     InvalidSize(f64),
+    #[error("polygon is not simple: side {0} (from vertex {0}) and side {1} (from vertex {1}) intersect or touch")]
+    SelfIntersecting(usize, usize),
+    #[error("triangulation failed: {0}")]
+    Triangulation(String),
 }
 
 /// Number of divisions of a length `length` for a target element size `h`:
@@ -291,7 +295,7 @@ impl Builder {
 
 /// Orders directed edges into head-to-tail chains: open chains first (each from its free
 /// start), then closed loops, each loop starting at its smallest start node.
-fn chain(edges: Vec<[usize; 2]>) -> Vec<[usize; 2]> {
+pub(crate) fn chain(edges: Vec<[usize; 2]>) -> Vec<[usize; 2]> {
     let mut by_start: HashMap<usize, Vec<usize>> = HashMap::new();
     let mut ends: std::collections::HashSet<usize> = std::collections::HashSet::new();
     for (k, e) in edges.iter().enumerate() {
