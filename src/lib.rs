@@ -34,6 +34,7 @@ pub mod output;
 pub mod results;
 pub mod packing;
 pub mod plot;
+pub mod remesh;
 pub mod solver;
 pub mod study;
 pub mod verify;

@@ -67,7 +67,7 @@ pub fn scaled_jacobian(p: [[f64; 2]; 4]) -> f64 {
 }
 
 /// Interior corner angles in degrees, in `[0, 360)`.
-fn corner_angles_deg(p: &[[f64; 2]; 4]) -> [f64; 4] {
+pub fn corner_angles_deg(p: &[[f64; 2]; 4]) -> [f64; 4] {
     let mut ang = [0.0; 4];
     for (i, a_out) in ang.iter_mut().enumerate() {
         let (a, b) = corner_edges(p, i);
@@ -80,7 +80,8 @@ fn corner_angles_deg(p: &[[f64; 2]; 4]) -> [f64; 4] {
     ang
 }
 
-fn aspect_ratio(p: &[[f64; 2]; 4]) -> f64 {
+/// Longest over shortest side (infinite for a zero-length side).
+pub fn aspect_ratio(p: &[[f64; 2]; 4]) -> f64 {
     let lens: Vec<f64> = (0..4).map(|i| norm(sub(p[(i + 1) % 4], p[i]))).collect();
     let max = lens.iter().cloned().fold(0.0, f64::max);
     let min = lens.iter().cloned().fold(f64::INFINITY, f64::min);

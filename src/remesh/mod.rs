@@ -1,0 +1,266 @@
+//! Building blocks for the adaptive re-meshing of deformed particles: when to re-mesh
+//! ([`monitor`]), where the points of a new mesh lie in the old one ([`locate`]), how
+//! quadrature-point and nodal fields move from the old to the new mesh ([`transfer`]), and how
+//! the material history is written as transferable fields ([`state`]).
+//!
+//! The mesher of the new particle mesh (the deformed boundary polygon meshed with
+//! quadrilaterals) lives in [`crate::mesh`]; everything here works for any pair of
+//! [`Mesh`]es of (nearly) the same region.
+//!
+//! ## Conventions
+//! - A mesh is always passed with the nodal coordinates it is to be read in (`coords`, same
+//!   length as `mesh.nodes`): the *old* mesh in its current (deformed) configuration, the *new*
+//!   mesh in its own nodes (built in the current configuration, so for the new mesh
+//!   reference = current).
+//! - Quadrature points are those of the element, [`crate::element::GAUSS`] (2×2 Gauss, weights
+//!   1), numbered `4 e + q` in the order of `GAUSS`; the position of point q of element e is
+//!   `Σ_a N_a(ξ_q) x_a` with [`crate::element::shape`].
+//! - A field with `n` components per point is one flat `Vec<f64>` with the components of a
+//!   point next to each other ([`QuadField`], [`NodalField`]).
+//!
+//! ## The transfer (see [`transfer`] for the details and the measured accuracy)
+//! 1. Old quadrature-point values are projected onto the old nodes by the global L2 projection
+//!    with the consistent mass matrix of the bilinear shape functions (faer sparse Cholesky).
+//! 2. The nodal field is interpolated with the old shape functions at the new points, located
+//!    in the old mesh by a uniform bucket grid and a Newton inversion of the bilinear map.
+//! 3. New points outside the old mesh (the new boundary differs from the old one by round-off or
+//!    by boundary resampling, e.g. a chord across a concave old boundary vertex) take the value
+//!    at the closest point of the nearest old element ("clamped" natural coordinates). This
+//!    keeps bounds and constants but is only first-order accurate there: a linear field is not
+//!    reproduced exactly at such points (error ≤ |∇f| × distance). [`TransferStats`] reports how
+//!    many points were outside and how far.
+//!
+//! ## Plan for the integration into the solver (not done here)
+//! At a re-mesh of body b at the end of a committed step (the solver is not modified by this
+//! module; this is the list of what it has to carry over):
+//! 1. **Trigger**: [`monitor::check_quality`] on the body's mesh with the current coordinates
+//!    `x = X + u`, after each committed step (cheap: O(elements)). Per body b of the model:
+//!    `mesh = model.bodies[b].mesh` (local numbering), `X = model.x0[off..off + n]` and
+//!    `x = X + u` on the same range (`off = node_offset`, `n = mesh.n_nodes()`), states
+//!    `sol.fields.states[eoff..eoff + ne]` (`eoff = elem_offset`).
+//! 2. **Geometry**: the new mesh is built from the current boundary polyline of the body; the
+//!    new reference coordinates are the current ones; u := 0 for the new nodes; velocities and
+//!    accelerations of the dynamic analysis are nodal fields: [`FieldTransfer::nodal_field`].
+//!    [`area_check`] confirms that the body area was kept.
+//! 3. **Material history** (`sol.fields.states`, `[MatState; 4]` per element): with F the old
+//!    total deformation gradient at each old Gauss point ([`state::deformation_gradient`]),
+//!    write `(F, MatState)` as the six components of [`state::state_to_components`] (the
+//!    logarithmic elastic strain ½ ln(F C_p⁻¹ Fᵀ), ε̄ᵖ, ε̄ᶜ) with [`state::states_to_field`],
+//!    transfer them with [`FieldTransfer::quadrature_field`], and read the new states with
+//!    [`state::states_from_field`] (C_p⁻¹ := b_e, because the new F = I). The deviatoric
+//!    Kirchhoff stress is then reproduced: to 1e-10 for a homogeneous deformation, with
+//!    second-order convergence for a non-uniform one (`tests/remesh.rs`).
+//! 4. **Elastic law**: [`crate::material::Elastic`] ignores `cp_inv` (it always starts from the
+//!    identity, b = F Fᵀ). After a re-mesh its stress would drop to zero. It must use
+//!    `old.cp_inv` instead of the identity (identical results while `cp_inv` stays the
+//!    identity, as it does for an elastic body that was never re-meshed).
+//! 5. **Volumetric state (Q1/P0)**: the element pressure comes from Θ = v_e/V_e with V_e the
+//!    reference area; on the new mesh Θ = 1, so the pressure would reset to λ_e. The element needs
+//!    a per-element initial volume ratio J₀ (Θ := J₀ v_e/V_e, i.e. the reference area of the
+//!    volumetric part replaced by V_e/J₀). J₀ is transferred as a field: ln Θ_old, constant per
+//!    old element, repeated at its four Gauss points, transferred with
+//!    [`FieldTransfer::quadrature_field_lumped`] and averaged over the four Gauss points of
+//!    each new element (P0). The lumped (bounded) projection is preferred for these
+//!    element-wise constant data, which jump from element to element: the consistent
+//!    projection overshoots at jumps (see [`transfer`]).
+//! 6. **Augmented-Lagrangian multipliers** λ_e (`sol.lambda`, incompressible bodies): a pressure
+//!    per element, transferred like ln Θ (Gauss-point field, then element average). After the
+//!    transfer the first step runs its Uzawa updates as usual, from the transferred λ_e.
+//! 7. **Enhanced modes** α (Q1/E4, `sol.fields.alpha`): element-internal parameters, not
+//!    transferable; reset to 0 (they are re-solved element by element at the next evaluation).
+//! 8. **Stresses for output** (`sol.fields.sig`): recomputed by the first assembly on the new
+//!    mesh; not transferred.
+//! 9. **Contact history**: keyed by node and master segment (node-to-segment pairs, sticking
+//!    anchors ξ_stick, normal/tangential multipliers) and by wall and node. The new boundary
+//!    nodes are located on the old boundary polyline: for each new boundary node, the old
+//!    boundary edge it lies on (closest old boundary edge) gives its pair history by
+//!    interpolating the two old nodes' histories (multipliers and gaps linearly; sticking
+//!    anchors are re-projected from the current position of the master point); pairs whose
+//!    master segment belonged to the re-meshed body are re-searched from scratch (the search is
+//!    frozen per step anyway). Frictionless contact needs no history beyond the multipliers,
+//!    which are re-established by the augmentation loop of the first step. The contact problem's
+//!    segments, slave lists, nodal areas and Lagrange multiplier candidates must be rebuilt,
+//!    which also changes the sparsity pattern (new analysis of the linear solver).
+//! 10. **Model bookkeeping**: node and element offsets of all later bodies, prescribed dofs,
+//!     loads and node groups referring to the body, the assembler (equation numbers, colours,
+//!     pattern) and the work vectors are rebuilt, as at start-up.
+//! 11. **Re-equilibration**: the transferred state is smooth but not in equilibrium on the new
+//!     mesh (projection error, smeared plastic-zone borders). The driver should run one
+//!     Newton solve at the committed load and time (dt = 0, no creep increment) before the
+//!     next step, and log the size of the residual it removed.
+// `!(x > 0.0)` is used on purpose: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod locate;
+pub mod monitor;
+pub mod state;
+pub mod transfer;
+
+use crate::mesh::Mesh;
+use thiserror::Error;
+
+pub use locate::{Location, PointLocator};
+pub use monitor::{check_quality, QualityCheck, QualityLimits, QualityMeasure, Worst};
+pub use state::{deformation_gradient, state_from_components, state_to_components, states_from_field, states_to_field, STATE_COMPONENTS};
+pub use transfer::{quadrature_points, FieldTransfer, L2Projector, NodalField, QuadField, TransferStats};
+
+/// Why a re-meshing building block could not do its work.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum RemeshError {
+    #[error("the mesh has no elements")]
+    EmptyMesh,
+    #[error("{what}: expected {expected} entries, got {got}")]
+    SizeMismatch { what: &'static str, expected: usize, got: usize },
+    #[error("element {element} refers to node {node}, but there are only {n_nodes} nodes")]
+    BadNodeIndex { element: usize, node: usize, n_nodes: usize },
+    #[error("{what} {index} is not finite")]
+    NonFinite { what: &'static str, index: usize },
+    #[error("element {element} is inverted or degenerate in the given coordinates (scaled Jacobian {scaled_jacobian:.3e})")]
+    InvalidElement { element: usize, scaled_jacobian: f64 },
+    #[error("a field needs at least one component per point")]
+    NoComponents,
+    #[error("the L2 projection failed: {0}")]
+    Projection(String),
+    #[error("inverted or degenerate element map or deformation (det = {det:.3e})")]
+    InvertedDeformation { det: f64 },
+    #[error("material state {index}: {reason}")]
+    InvalidState { index: usize, reason: String },
+}
+
+/// Checks shared by the building blocks: at least one element, one coordinate pair per node,
+/// node indices in range and finite coordinates.
+pub(crate) fn check_mesh(mesh: &Mesh, coords: &[[f64; 2]]) -> Result<(), RemeshError> {
+    if mesh.elements.is_empty() {
+        return Err(RemeshError::EmptyMesh);
+    }
+    if coords.len() != mesh.nodes.len() {
+        return Err(RemeshError::SizeMismatch { what: "nodal coordinates", expected: mesh.nodes.len(), got: coords.len() });
+    }
+    let n_nodes = coords.len();
+    for (e, el) in mesh.elements.iter().enumerate() {
+        if let Some(&node) = el.iter().find(|&&n| n >= n_nodes) {
+            return Err(RemeshError::BadNodeIndex { element: e, node, n_nodes });
+        }
+    }
+    if let Some(i) = coords.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        return Err(RemeshError::NonFinite { what: "node", index: i });
+    }
+    Ok(())
+}
+
+/// Total areas of an old and a new mesh of one body (mm², shoelace formula, exact for the
+/// bilinear elements).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaCheck {
+    pub old_area: f64,
+    pub new_area: f64,
+    /// (new − old) / old.
+    pub relative_change: f64,
+}
+
+/// Areas of the old mesh (in `old_coords`) and the new mesh (in `new_coords`). When the new
+/// mesh keeps the old boundary polyline the two agree to round-off; resampling the boundary
+/// changes the area by the segments cut off or added.
+///
+/// # Errors
+/// Invalid mesh input (see [`RemeshError`]) or a non-positive old area.
+pub fn area_check(old_mesh: &Mesh, old_coords: &[[f64; 2]], new_mesh: &Mesh, new_coords: &[[f64; 2]]) -> Result<AreaCheck, RemeshError> {
+    check_mesh(old_mesh, old_coords)?;
+    check_mesh(new_mesh, new_coords)?;
+    let old_area = old_mesh.area(old_coords);
+    let new_area = new_mesh.area(new_coords);
+    if !(old_area > 0.0) {
+        return Err(RemeshError::InvalidElement { element: 0, scaled_jacobian: old_area });
+    }
+    Ok(AreaCheck { old_area, new_area, relative_change: (new_area - old_area) / old_area })
+}
+
+#[cfg(test)]
+pub(crate) mod test_support {
+    //! Meshes for the tests: generator meshes moved by a smooth displacement that emulates a
+    //! deformed particle.
+    use crate::mesh::Mesh;
+
+    /// Current coordinates x = A X + c + bubble(X), with the bubble vanishing on the boundary
+    /// of the rectangle `[0, w] × [0, h]`: the boundary stays the image of the rectangle under
+    /// the affine map, which is the same polygon for every mesh of the rectangle.
+    pub fn deform_rectangle(mesh: &Mesh, w: f64, h: f64, amp: f64) -> Vec<[f64; 2]> {
+        use std::f64::consts::PI;
+        mesh.nodes
+            .iter()
+            .map(|&[x, y]| {
+                let b = (PI * x / w).sin() * (PI * y / h).sin();
+                let bx = amp * b * (2.0 * PI * y / h).cos();
+                let by = amp * b * (PI * x / w).cos();
+                let (u, v) = (x + bx, y + by);
+                affine([u, v])
+            })
+            .collect()
+    }
+
+    /// The affine part used by the deformation helpers: a shear and a compression.
+    pub fn affine(p: [f64; 2]) -> [f64; 2] {
+        [1.1 * p[0] + 0.25 * p[1] + 0.3, -0.05 * p[0] + 0.8 * p[1] - 0.2]
+    }
+
+    /// Smooth displacement of a disc mesh of radius `r` about the origin with a bubble that
+    /// vanishes on the circle, followed by the affine map.
+    pub fn deform_disc(mesh: &Mesh, r: f64, amp: f64) -> Vec<[f64; 2]> {
+        mesh.nodes
+            .iter()
+            .map(|&[x, y]| {
+                let b = 1.0 - (x * x + y * y) / (r * r);
+                let u = x + amp * b * (y / r);
+                let v = y + amp * b * (x / r) * (x / r);
+                affine([u, v])
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_support::*;
+    use super::*;
+    use crate::mesh::shapes;
+
+    /// Two rectangle meshes of different density, both with the same deformed boundary: the
+    /// areas agree to round-off (1e-12 relative: shoelace sums of a few hundred terms of size
+    /// ≤ 1).
+    #[test]
+    fn area_kept_with_same_boundary() {
+        let old = shapes::rectangle([0.0, 0.0], 2.0, 1.0, 12, 7);
+        let new = shapes::rectangle([0.0, 0.0], 2.0, 1.0, 21, 9);
+        let xo = deform_rectangle(&old, 2.0, 1.0, 0.15);
+        let xn: Vec<[f64; 2]> = new.nodes.iter().map(|&p| affine(p)).collect();
+        let a = area_check(&old, &xo, &new, &xn).unwrap();
+        assert!(a.relative_change.abs() < 1e-12, "{a:?}");
+        // the affine map has det = 1.1 * 0.8 + 0.25 * 0.05 = 0.8925
+        assert!((a.old_area - 2.0 * 0.8925).abs() < 1e-12);
+    }
+
+    /// Discs of two densities: the inscribed polygons differ, the finer one is larger and both
+    /// are below π r² by O(h²).
+    #[test]
+    fn area_of_resampled_boundary_differs() {
+        let coarse = shapes::disc([0.0, 0.0], 1.0, 0.4);
+        let fine = shapes::disc([0.0, 0.0], 1.0, 0.1);
+        let a = area_check(&coarse, &coarse.nodes, &fine, &fine.nodes).unwrap();
+        assert!(a.relative_change > 0.0 && a.relative_change < 0.05, "{a:?}");
+        assert!(a.new_area < std::f64::consts::PI);
+    }
+
+    #[test]
+    fn degenerate_input_is_an_error() {
+        let m = shapes::rectangle([0.0, 0.0], 1.0, 1.0, 2, 2);
+        let empty = Mesh::default();
+        assert_eq!(area_check(&empty, &[], &m, &m.nodes), Err(RemeshError::EmptyMesh));
+        assert!(matches!(area_check(&m, &m.nodes[1..], &m, &m.nodes), Err(RemeshError::SizeMismatch { .. })));
+        let mut bad = m.nodes.clone();
+        bad[3][1] = f64::NAN;
+        assert!(matches!(area_check(&m, &bad, &m, &m.nodes), Err(RemeshError::NonFinite { .. })));
+        let mut m2 = m.clone();
+        m2.elements[0][2] = 99;
+        assert!(matches!(area_check(&m2, &m2.nodes, &m, &m.nodes), Err(RemeshError::BadNodeIndex { .. })));
+    }
+}
