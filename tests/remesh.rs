@@ -196,3 +196,47 @@ fn nonuniform_state_transfer_converges() {
     let wrong = state_errors(0.05, 0.0375, false);
     assert!(wrong.0 > 0.5, "without the push-forward the stress is wrong by O(1): {wrong:?}");
 }
+
+/// `remesh::remesh_particle` on a disc deformed into a non-convex, badly distorted shape (a
+/// dent pushed into one side, as a neighbour's corner would, then sheared by 2.5 and squashed
+/// to 0.6 of its height): the monitor asks for a new mesh;
+/// the new one, built on the deformed boundary by the polygon mesher, keeps every old boundary
+/// point (so the contact surface is the same), keeps the area to 1e-12 (the same polygon),
+/// passes the monitor, and carries a linear field over exactly (1e-10).
+#[test]
+fn remesh_particle_keeps_boundary_and_area_and_passes_the_monitor() {
+    let old = shapes::disc([0.0, 0.0], 10.0, 1.5);
+    // a dent (points near x = +10 pushed in by up to 3 mm, smoothly) and a shear of 2.5
+    let x: Vec<[f64; 2]> = old
+        .nodes
+        .iter()
+        .map(|p| {
+            let push = 3.0 * (-(p[1] / 3.0).powi(2)).exp() * (p[0] / 10.0).max(0.0).powi(4);
+            [p[0] - push + 2.5 * p[1], 0.6 * p[1]]
+        })
+        .collect();
+    let limits = QualityLimits::default();
+    let before = remesh::check_quality(&old, &x, &limits).unwrap();
+    assert!(before.needs_remesh, "the deformation must cross a limit: {before:?}");
+    let new = remesh::remesh_particle(&old, &x, 1.5).unwrap();
+    let after = remesh::check_quality(&new, &new.nodes, &limits).unwrap();
+    assert!(!after.needs_remesh, "the new mesh must pass: {after:?}");
+    let area = remesh::area_check(&old, &x, &new, &new.nodes).unwrap();
+    assert!(area.relative_change.abs() < 1e-12, "{area:?}");
+    // every old boundary node is a node of the new boundary
+    let new_boundary: Vec<[f64; 2]> = new.boundary.iter().map(|e| new.nodes[e[0]]).collect();
+    for e in &old.boundary {
+        let p = x[e[0]];
+        assert!(new_boundary.iter().any(|q| (q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12), "old boundary point {p:?} lost");
+    }
+    // a linear field moves exactly
+    let f = |p: [f64; 2], out: &mut [f64]| out[0] = 2.0 + 0.3 * p[0] - 0.7 * p[1];
+    let qp_old = remesh::quadrature_points(&old, &x).unwrap();
+    let field = QuadField::from_fn(&qp_old, 1, f);
+    let mut tr = FieldTransfer::new(&old, &x, &new, &new.nodes).unwrap();
+    let moved = tr.quadrature_field(&field).unwrap();
+    let qp_new = remesh::quadrature_points(&new, &new.nodes).unwrap();
+    let exact = QuadField::from_fn(&qp_new, 1, f);
+    let worst = (0..exact.n_points()).map(|i| (moved.point(i)[0] - exact.point(i)[0]).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-10 * 10.0, "linear field error {worst:.3e}");
+}

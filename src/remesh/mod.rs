@@ -125,6 +125,10 @@ pub enum RemeshError {
     InvertedDeformation { det: f64 },
     #[error("material state {index}: {reason}")]
     InvalidState { index: usize, reason: String },
+    #[error("the particle's boundary has {0} loops; expected one (a particle without holes)")]
+    BoundaryLoops(usize),
+    #[error("meshing the deformed boundary failed: {0}")]
+    Mesher(String),
 }
 
 /// Checks shared by the building blocks: at least one element, one coordinate pair per node,
@@ -264,3 +268,25 @@ mod tests {
         assert!(matches!(area_check(&m2, &m2.nodes, &m, &m.nodes), Err(RemeshError::BadNodeIndex { .. })));
     }
 }
+
+/// A new mesh of a deformed particle: its current boundary polygon (every boundary node at
+/// its current position `coords`, in the order of the boundary loop) meshed with
+/// quadrilaterals of size about `h` by [`crate::mesh::polygon::simple_polygon`]. Every old
+/// boundary node stays a node of the new boundary (sides longer than `h` get points in
+/// between, shorter ones are kept: contact zones, where the old boundary is compressed, stay
+/// fine), so the particle's area and its contact surface are unchanged to round-off. The new
+/// mesh's nodes are in the current configuration (its reference = current).
+///
+/// # Errors
+/// The checks of the other building blocks, a boundary with more or fewer than one loop, or a
+/// boundary polygon the mesher refuses (self-intersecting after an inverted element, say).
+pub fn remesh_particle(mesh: &Mesh, coords: &[[f64; 2]], h: f64) -> Result<Mesh, RemeshError> {
+    check_mesh(mesh, coords)?;
+    let loops = mesh.boundary_loops();
+    if loops.len() != 1 {
+        return Err(RemeshError::BoundaryLoops(loops.len()));
+    }
+    let outline: Vec<[f64; 2]> = loops[0].iter().map(|&n| coords[n]).collect();
+    crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()))
+}
+
