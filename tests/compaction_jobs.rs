@@ -39,7 +39,7 @@ fn run_job(name: &str) -> (Simulation, Compaction, String, PressureHistory) {
     let path = format!("jobs/compaction/{name}");
     let c = case::load(std::path::Path::new(&path)).unwrap();
     let model = Model::from_case(&c).unwrap();
-    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
+    let mut sim = Simulation::new(model, c.time, c.solver).unwrap();
     let mut hist = Vec::new();
     let summary = sim
         .run(&mut |_, r| {
@@ -194,7 +194,7 @@ fn discs_2x2_lateral_three_methods_agree() {
         let path = format!("jobs/compaction/{name}");
         let mut c = case::load(std::path::Path::new(&path)).unwrap();
         c.contact.method = method;
-        let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time.clone(), c.solver.clone()).unwrap();
+        let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
         let mut hist = Vec::new();
         sim.run(&mut |_, r| {
             if let Some(c) = &r.compaction {
@@ -256,7 +256,7 @@ fn octagons_hitting_at_rest_need_the_viscous_retry() {
     let mut c = case::load(std::path::Path::new("jobs/compaction/octagons_4x1_asphalt_impact.toml")).unwrap();
     c.contact.viscous_retry = false;
     let model = Model::from_case(&c).unwrap();
-    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
+    let mut sim = Simulation::new(model, c.time, c.solver).unwrap();
     let err = sim.run(&mut |_, _| {}).expect_err("without the retry the impact step must fail");
     let t = sim.sol.time;
     assert!((3.0..4.0).contains(&t), "failed at t = {t} s ({err}), expected at the impact near 3.47 s");

@@ -111,6 +111,13 @@ impl Mesh {
     }
 }
 
+/// Bounding box `[lo, hi]` of a set of points (`lo` = +∞ and `hi` = −∞ for no points).
+pub fn bounding_box(pts: &[[f64; 2]]) -> [[f64; 2]; 2] {
+    pts.iter().fold([[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]], |[lo, hi], q| {
+        [[lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])]]
+    })
+}
+
 /// Signed area of a closed polygon (positive when counter-clockwise).
 pub fn polygon_area(pts: impl IntoIterator<Item = [f64; 2]>) -> f64 {
     let p: Vec<[f64; 2]> = pts.into_iter().collect();

@@ -56,14 +56,7 @@ pub(crate) fn orient(a: P, b: P, c: P) -> f64 {
 
 /// Half the diagonal of the bounding box of `pts` (0 for no points).
 pub(crate) fn size_of(pts: &[P]) -> f64 {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for p in pts {
-        for d in 0..2 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let [lo, hi] = super::bounding_box(pts);
     if pts.is_empty() {
         0.0
     } else {

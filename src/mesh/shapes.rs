@@ -328,14 +328,7 @@ pub(crate) fn chain(edges: Vec<[usize; 2]>) -> Vec<[usize; 2]> {
 }
 
 fn merge_tol(points: &[P]) -> f64 {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for p in points {
-        for d in 0..2 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let [lo, hi] = super::bounding_box(points);
     let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
     1e-9 * size
 }
@@ -763,14 +756,7 @@ pub fn convex_polygon(vertices: &[[f64; 2]], h: f64) -> Result<Mesh, MeshError> 
         return Err(MeshError::NonFiniteVertex(k));
     }
     let size = {
-        let mut lo = [f64::INFINITY; 2];
-        let mut hi = [f64::NEG_INFINITY; 2];
-        for v in vertices {
-            for d in 0..2 {
-                lo[d] = lo[d].min(v[d]);
-                hi[d] = hi[d].max(v[d]);
-            }
-        }
+        let [lo, hi] = super::bounding_box(vertices);
         (hi[0] - lo[0]).hypot(hi[1] - lo[1])
     };
     for k in 0..n {

@@ -156,14 +156,7 @@ impl PointLocator {
     /// Cell ranges `[i0, i1, j0, j1]` (inclusive) overlapped by the bounding box of a quad,
     /// widened by a relative 1e-9 so that points on a bucket border find the element.
     fn cell_range(&self, p: &[[f64; 2]; 4]) -> [usize; 4] {
-        let mut lo = [f64::INFINITY; 2];
-        let mut hi = [f64::NEG_INFINITY; 2];
-        for q in p {
-            for k in 0..2 {
-                lo[k] = lo[k].min(q[k]);
-                hi[k] = hi[k].max(q[k]);
-            }
-        }
+        let [lo, hi] = crate::mesh::bounding_box(p);
         let pad = [1e-9 * self.cell[0], 1e-9 * self.cell[1]];
         [
             self.cell_of(lo[0] - pad[0], 0),
@@ -317,14 +310,7 @@ pub fn invert_bilinear(p: &[[f64; 2]; 4], x: [f64; 2]) -> Option<[f64; 2]> {
 /// [−1, 1]².
 fn invert_if_inside(p: &[[f64; 2]; 4], x: [f64; 2]) -> Option<[f64; 2]> {
     // cheap bounding-box rejection (with a relative margin for points on an edge)
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for q in p {
-        for k in 0..2 {
-            lo[k] = lo[k].min(q[k]);
-            hi[k] = hi[k].max(q[k]);
-        }
-    }
+    let [lo, hi] = crate::mesh::bounding_box(p);
     let pad = 1e-9 * (hi[0] - lo[0]).max(hi[1] - lo[1]);
     if x[0] < lo[0] - pad || x[0] > hi[0] + pad || x[1] < lo[1] - pad || x[1] > hi[1] + pad {
         return None;
