@@ -48,7 +48,8 @@ pub struct ElementFields {
     pub states: Vec<[MatState; 4]>,
     /// Cauchy stress per Gauss point `[xx, yy, xy, zz]` (MPa).
     pub sig: Vec<[[f64; 4]; 4]>,
-    /// Element pressure (MPa) and area ratio Θ.
+    /// Element pressure (MPa) and area ratio Θ (with respect to the original configuration:
+    /// the element's initial volume ratio j₀ included, see [`crate::element`]).
     pub pressure: Vec<f64>,
     pub theta: Vec<f64>,
     /// Enhanced-mode parameters per element (Q1/P0 enhanced only).
@@ -207,7 +208,9 @@ impl Assembler {
 
     /// Assemble the internal force `f_int` (all dofs, N/mm) and, if `kk` is given, the tangent
     /// on the free dofs, for nodal displacements `u` (dof `2 n + c`), committed states `old` and the element
-    /// volumetric data `vol`. Gauss-point results go to `fields`.
+    /// volumetric data `vol`. Gauss-point results go to `fields`. Every element's reference
+    /// configuration is the original one (initial volume ratio j₀ = 1, see
+    /// [`Assembler::assemble_j0`]).
     #[allow(clippy::too_many_arguments)]
     pub fn assemble(
         &mut self,
@@ -216,6 +219,30 @@ impl Assembler {
         old: &[[MatState; 4]],
         alpha0: &[[f64; N_ENH]],
         vol: &[Volumetric],
+        inc: TimeIncrement,
+        kk: Option<&mut CsrMatrix>,
+        f_int: &mut [f64],
+        fields: &mut ElementFields,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> Result<(), AssemblyError> {
+        self.assemble_j0(model, u, old, alpha0, vol, None, inc, kk, f_int, fields, pool)
+    }
+
+    /// As [`Assembler::assemble`], with the initial volume ratio j₀ of every element
+    /// (`j0[e]`, see the module docs of [`crate::element`]); `None` means j₀ = 1 everywhere.
+    ///
+    /// # Errors
+    /// As [`Assembler::assemble`]; an element without an entry in `j0`, or with a j₀ that is
+    /// not positive and finite, fails with [`MaterialError::InvalidVolumeRatio`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble_j0(
+        &mut self,
+        model: &Model,
+        u: &[f64],
+        old: &[[MatState; 4]],
+        alpha0: &[[f64; N_ENH]],
+        vol: &[Volumetric],
+        j0: Option<&[f64]>,
         inc: TimeIncrement,
         mut kk: Option<&mut CsrMatrix>,
         f_int: &mut [f64],
@@ -243,11 +270,13 @@ impl Assembler {
             let xx0 = el.map(|n| model.x0[n]);
             let ue = el.map(|n| [u[2 * n], u[2 * n + 1]]);
             let law = &model.materials[model.elem_material[e]];
+            // a missing entry is reported as an invalid (NaN) ratio of this element
+            let j0e = j0.map_or(Some(1.0), |v| v.get(e).copied()).unwrap_or(f64::NAN);
             match model.element {
-                ElementKind::Q1P0 => element::evaluate(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], tangent, &mut out),
+                ElementKind::Q1P0 => element::evaluate_j0(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], j0e, tangent, &mut out),
                 ElementKind::Q1P0Enhanced => {
                     let mut a = alpha0[e];
-                    let r = element::evaluate_enhanced(law, &xx0, &ue, &old[e], inc, vol[e], tangent, &mut a, &mut out);
+                    let r = element::evaluate_enhanced_j0(law, &xx0, &ue, &old[e], inc, vol[e], j0e, tangent, &mut a, &mut out);
                     out.alpha = a;
                     r
                 }

@@ -20,14 +20,38 @@
 //! ## Volumetric part (mean dilatation; Simo, Taylor & Pister 1985; Bathe's u/p with a
 //! condensed constant pressure)
 //! With v_e the current and V_e the reference element area (shoelace formula, exact for the
-//! bilinear quadrilateral) and Θ = v_e/V_e, the element stores the volumetric energy
-//! `V_e U(Θ) + λ_e (v_e − V_e)`, U(Θ) = ½ κ (ln Θ)², so the element pressure (Cauchy, mean
-//! stress, positive in tension) is `p = λ_e + κ ln Θ / Θ`, giving Kirchhoff pressure κ ln Θ for
-//! λ_e = 0 as in Hencky elasticity. Then
-//! `f_vol = p g`, `K_vol = (U″(Θ)/V_e) g gᵀ + p H` with g = ∂v_e/∂x and H = ∂²v_e/∂x² (constant).
+//! bilinear quadrilateral), j₀ the initial volume ratio of the element (see below; 1 for a
+//! mesh built in the undeformed configuration) and Θ = j₀ v_e/V_e, the element stores the
+//! volumetric energy `V̂_e U(Θ) + λ_e (v_e − V̂_e)` with V̂_e = V_e/j₀,
+//! U(Θ) = ½ κ (ln Θ)², so the element pressure (Cauchy, mean stress, positive in tension) is
+//! `p = λ_e + κ ln Θ / Θ`, giving Kirchhoff pressure κ ln Θ for λ_e = 0 as in Hencky
+//! elasticity. Then
+//! `f_vol = p g`, `K_vol = (U″(Θ)/V̂_e) g gᵀ + p H` with g = ∂v_e/∂x and H = ∂²v_e/∂x²
+//! (constant).
 //! - compressible law: κ = K (bulk modulus), λ_e = 0;
 //! - incompressible law (ν = 0.5): κ is a penalty and λ_e an augmented-Lagrangian multiplier
 //!   updated by the driver (Uzawa: λ_e ← p) until |Θ − 1| is below a tolerance.
+//!
+//! ## Initial volume ratio j₀ (re-meshing: reference configuration = a deformed one)
+//! The laws return Kirchhoff stresses τ = J σ per unit volume of the *original* configuration
+//! (the one in which Θ = 1 and C_p⁻¹ = I means stress free). When a particle is re-meshed in
+//! its current configuration, the new reference configuration already carries the volume
+//! ratio j₀ = Θ_old with respect to the original one, and the material history is pushed
+//! forward (C_p⁻¹ := b_e of before, see [`crate::remesh::state`]). The element then works
+//! with the total volume ratio j₀ J (J = det F relative to its own reference):
+//! - volumetric part: Θ = j₀ v_e/V_e and reference area V̂_e = V_e/j₀ (above);
+//! - deviatoric part: the law's τ′ is divided by j₀ before it enters the element, i.e. the
+//!   Kirchhoff stress and its tangent relative to the element's reference configuration are
+//!   τ′/j₀ and c/j₀; hence the Cauchy stress σ′ = τ′/(j₀ J), and TL (S = F⁻¹ (τ′/j₀) F⁻ᵀ over
+//!   dV₀) and UL (σ′ over dv) stay the same linearisation.
+//!
+//! With the history pushed forward and j₀ = Θ_old, an element built on the deformed
+//! coordinates with zero displacement has the stress, pressure and internal force of the old
+//! one (exactly for a homogeneous deformation, `tests/rereference.rs`). j₀ is one value per
+//! element (P0, like the pressure); where the old deformation varied inside an element, the
+//! deviatoric Cauchy stress carries the factor J_old(point)/Θ_old of that variation.
+//! j₀ = 1 gives the same results, bit for bit, as an element without the option
+//! ([`evaluate`], [`evaluate_enhanced`]).
 
 use crate::case::Formulation;
 use crate::material::{ConstitutiveLaw, MatResponse, MatState, MaterialError, TimeIncrement};
@@ -86,7 +110,8 @@ pub struct ElementOut {
     pub gauss: [GaussOut; 4],
     /// Element pressure p (Cauchy, MPa, positive in tension).
     pub pressure: f64,
-    /// Area ratio Θ = v_e/V_e.
+    /// Volume (area) ratio Θ = j₀ v_e/V_e with respect to the original configuration
+    /// (module docs; j₀ = 1 unless the mesh was built in a deformed configuration).
     pub theta: f64,
     /// Enhanced-mode parameters (zero for Q1/P0).
     pub alpha: [f64; N_ENH],
@@ -149,11 +174,13 @@ fn inv2(m: &[[f64; 2]; 2]) -> (f64, [[f64; 2]; 2]) {
 
 /// The mean-dilatation volumetric part shared by both element technologies.
 struct VolumetricPart {
-    /// Reference area V_e (mm²).
+    /// Reference area of the mesh element V_e (mm²).
+    area0: f64,
+    /// Reference area of the volumetric part V̂_e = V_e/j₀ (mm²).
     vol0: f64,
     /// g = ∂v_e/∂x.
     g: [f64; 8],
-    /// Θ = v_e / V_e.
+    /// Θ = j₀ v_e / V_e.
     theta: f64,
     /// Element pressure p = λ_e + κ ln Θ / Θ (MPa).
     p: f64,
@@ -161,13 +188,23 @@ struct VolumetricPart {
     upp: f64,
 }
 
+/// Checks the initial volume ratio j₀ of an element (positive and finite).
+fn check_j0(j0: f64) -> Result<(), MaterialError> {
+    if j0 > 0.0 && j0.is_finite() {
+        Ok(())
+    } else {
+        Err(MaterialError::InvalidVolumeRatio(j0))
+    }
+}
+
 impl VolumetricPart {
     /// Areas from coordinates relative to node 0 and v − V from the displacements, so that
-    /// neither the shoelace sums nor ln Θ lose tiny strains to round-off.
-    fn new(xx0: &[[f64; 2]; 4], uu: &[[f64; 2]; 4], vol: Volumetric) -> Result<Self, MaterialError> {
+    /// neither the shoelace sums nor ln Θ lose tiny strains to round-off. `j0` is the initial
+    /// volume ratio (checked by the caller).
+    fn new(xx0: &[[f64; 2]; 4], uu: &[[f64; 2]; 4], vol: Volumetric, j0: f64) -> Result<Self, MaterialError> {
         let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
         let x: [[f64; 2]; 4] = std::array::from_fn(|a| [xc[a][0] + uu[a][0], xc[a][1] + uu[a][1]]);
-        let (vol0, _) = quad_area_grad(&xc);
+        let (area0, _) = quad_area_grad(&xc);
         let (_, g) = quad_area_grad(&x);
         // v − V = ½ Σ (X_a × u_{a+1} + u_a × X_{a+1} + u_a × u_{a+1})
         let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
@@ -177,14 +214,16 @@ impl VolumetricPart {
             dvol += cross(xc[a], uu[n]) + cross(uu[a], xc[n]) + cross(uu[a], uu[n]);
         }
         dvol *= 0.5;
-        let theta = 1.0 + dvol / vol0;
-        if theta <= 0.0 || vol0 <= 0.0 {
-            return Err(MaterialError::InvertedElement(theta));
+        let ratio = 1.0 + dvol / area0;
+        if ratio <= 0.0 || area0 <= 0.0 {
+            return Err(MaterialError::InvertedElement(ratio));
         }
-        let ln_t = (dvol / vol0).ln_1p();
+        // j₀ = 1: ln j₀ = 0 and j₀ · ratio = ratio exactly, so nothing changes
+        let theta = j0 * ratio;
+        let ln_t = j0.ln() + (dvol / area0).ln_1p();
         let p = vol.lambda + vol.kappa * ln_t / theta;
         let upp = vol.kappa * (1.0 - ln_t) / (theta * theta);
-        Ok(Self { vol0, g, theta, p, upp })
+        Ok(Self { area0, vol0: area0 / j0, g, theta, p, upp })
     }
 
     /// f += p g and, with a tangent, K += (U″/V) g gᵀ + p H.
@@ -268,7 +307,18 @@ fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [
     Ok((det_j0, dn_dx0))
 }
 
-/// Evaluate one element.
+/// The law's response at a Gauss point relative to an element reference configuration with
+/// initial volume ratio j₀: τ′/j₀ and c/j₀ (module docs). `inv_j0` = 1/j₀ (exactly 1 for
+/// j₀ = 1, which leaves the response unchanged bit for bit).
+fn law_response(law: &dyn ConstitutiveLaw, ff: &Matrix3<f64>, old: &MatState, inc: TimeIncrement, inv_j0: f64) -> Result<MatResponse, MaterialError> {
+    let mut r = law.update(ff, old, inc)?;
+    r.tau.iter_mut().for_each(|v| *v *= inv_j0);
+    r.cc.iter_mut().flatten().for_each(|v| *v *= inv_j0);
+    Ok(r)
+}
+
+/// Evaluate one element whose reference configuration is the original one (j₀ = 1): the same
+/// as [`evaluate_j0`] with `j0 = 1.0`.
 ///
 /// - `xx0`: reference nodal coordinates; `uu`: nodal displacements (mm). Kinematics are
 ///   formed from the displacements (F = I + ∇₀u, v − V from the shoelace formula of the
@@ -289,13 +339,36 @@ pub fn evaluate(
     tangent: bool,
     out: &mut ElementOut,
 ) -> Result<(), MaterialError> {
+    evaluate_j0(formulation, law, xx0, uu, old, inc, vol, 1.0, tangent, out)
+}
+
+/// Evaluate one element (arguments as [`evaluate`]) whose reference configuration carries the
+/// initial volume ratio `j0` (module docs: Θ = j₀ v_e/V_e, deviatoric stress τ′/(j₀ J)).
+///
+/// Errors as [`evaluate`], and [`MaterialError::InvalidVolumeRatio`] when `j0` is not positive
+/// and finite.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_j0(
+    formulation: Formulation,
+    law: &dyn ConstitutiveLaw,
+    xx0: &[[f64; 2]; 4],
+    uu: &[[f64; 2]; 4],
+    old: &[MatState; 4],
+    inc: TimeIncrement,
+    vol: Volumetric,
+    j0: f64,
+    tangent: bool,
+    out: &mut ElementOut,
+) -> Result<(), MaterialError> {
+    check_j0(j0)?;
+    let inv_j0 = 1.0 / j0;
     out.f_int = [0.0; 8];
     if tangent {
         out.kk = [[0.0; 8]; 8];
     }
 
     // --- volumetric part (mean dilatation) ---
-    let vp = VolumetricPart::new(xx0, uu, vol)?;
+    let vp = VolumetricPart::new(xx0, uu, vol, j0)?;
     vp.add_to(&mut out.f_int, if tangent { Some(&mut out.kk) } else { None });
     let p = vp.p;
     out.pressure = p;
@@ -310,7 +383,7 @@ pub fn evaluate(
             return Err(MaterialError::InvertedElement(jac));
         }
         let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
-        let MatResponse { tau, cc, state } = law.update(&ff, &old[q], inc)?;
+        let MatResponse { tau, cc, state } = law_response(law, &ff, &old[q], inc, inv_j0)?;
         let w0 = det_j0; // Gauss weight 1, unit thickness: dV₀ = det J0
 
         out.gauss[q] = GaussOut {
@@ -436,7 +509,8 @@ pub const N_ENH: usize = 4;
 /// Both TL and UL requests are computed in the total Lagrangian algebra: each column j of the
 /// 12 generalised degrees of freedom has a gradient variation δFʲ, with
 /// `B_L[:, j] = sym(Fᵀ δFʲ)` (rows δE₁₁, δE₂₂, 2δE₁₂) and `K_NL[i][j] = δFⁱ : (δFʲ S)`.
-/// On return `alpha` holds the solution.
+/// On return `alpha` holds the solution. The reference configuration is the original one
+/// (j₀ = 1): the same as [`evaluate_enhanced_j0`] with `j0 = 1.0`.
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_enhanced(
     law: &dyn ConstitutiveLaw,
@@ -449,8 +523,29 @@ pub fn evaluate_enhanced(
     alpha: &mut [f64; N_ENH],
     out: &mut ElementOut,
 ) -> Result<(), MaterialError> {
+    evaluate_enhanced_j0(law, xx0, uu, old, inc, vol, 1.0, tangent, alpha, out)
+}
+
+/// [`evaluate_enhanced`] for an element whose reference configuration carries the initial
+/// volume ratio `j0` (module docs). Errors as [`evaluate_enhanced`], and
+/// [`MaterialError::InvalidVolumeRatio`] when `j0` is not positive and finite.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_enhanced_j0(
+    law: &dyn ConstitutiveLaw,
+    xx0: &[[f64; 2]; 4],
+    uu: &[[f64; 2]; 4],
+    old: &[MatState; 4],
+    inc: TimeIncrement,
+    vol: Volumetric,
+    j0: f64,
+    tangent: bool,
+    alpha: &mut [f64; N_ENH],
+    out: &mut ElementOut,
+) -> Result<(), MaterialError> {
+    check_j0(j0)?;
+    let inv_j0 = 1.0 / j0;
     // volumetric part and pressure: same as the Q1/P0 element
-    let vp = VolumetricPart::new(xx0, uu, vol)?;
+    let vp = VolumetricPart::new(xx0, uu, vol, j0)?;
     let p = vp.p;
 
     // centre Jacobian
@@ -509,7 +604,7 @@ pub fn evaluate_enhanced(
                 return Err(MaterialError::InvertedElement(jac));
             }
             let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
-            let MatResponse { tau, cc, state } = law.update(&ff, &old[q], inc)?;
+            let MatResponse { tau, cc, state } = law_response(law, &ff, &old[q], inc, inv_j0)?;
             out.gauss[q] = GaussOut { sig: [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p], state };
             let t = voigt_congruence(&f_inv);
             let s = pull_back_stress(&t, &tau);
@@ -548,7 +643,7 @@ pub fn evaluate_enhanced(
         }
         // local equations R_α = 0
         let ra: [f64; N_ENH] = std::array::from_fn(|m| rr[8 + m]);
-        let scale = rr[..8].iter().map(|v| v.abs()).fold(0.0, f64::max).max(vol.kappa.abs() * 1e-12 * vp.vol0.sqrt());
+        let scale = rr[..8].iter().map(|v| v.abs()).fold(0.0, f64::max).max(vol.kappa.abs() * 1e-12 * vp.area0.sqrt());
         let ra_norm = ra.iter().map(|v| v.abs()).fold(0.0, f64::max);
         // converged, or stagnating at round-off (Newton converges quadratically here, so a
         // residual that stops halving is at the floor of the arithmetic)
@@ -603,4 +698,106 @@ pub fn evaluate_enhanced(
     out.pressure = p;
     out.theta = vp.theta;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Elastic, HardeningTable, J2Plastic, Material};
+
+    const XX0: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.1], [1.1, 1.0], [-0.1, 0.9]];
+
+    fn run(kind: Option<Formulation>, law: &Material, uu: &[[f64; 2]; 4], vol: Volumetric, j0: f64, tangent: bool) -> ElementOut {
+        let old = [MatState::default(); 4];
+        let inc = TimeIncrement { time: 1.0, dt: 1.0 };
+        let mut out = ElementOut::default();
+        match kind {
+            Some(f) => evaluate_j0(f, law, &XX0, uu, &old, inc, vol, j0, tangent, &mut out).unwrap(),
+            None => {
+                let mut alpha = [0.0; N_ENH];
+                evaluate_enhanced_j0(law, &XX0, uu, &old, inc, vol, j0, tangent, &mut alpha, &mut out).unwrap();
+            }
+        }
+        out
+    }
+
+    /// With j₀ ≠ 1 the tangent is still the derivative of the internal force: central
+    /// differences (h = 1e-7 mm on 1 mm elements: truncation ~h², round-off ~1e-16/h) agree
+    /// to 1e-6 of the largest stiffness entry, for Q1/P0 TL and UL and Q1/E4, elastic, J2 in
+    /// the plastic range and the incompressible volumetric part with a multiplier (the same
+    /// check and tolerance as tests/element_assembly.rs for j₀ = 1).
+    #[test]
+    fn tangent_is_consistent_with_j0() {
+        let uu = [[0.0, 0.0], [0.05, -0.02], [0.08, 0.03], [-0.02, 0.04]];
+        let hard = HardeningTable::from_plastic_strain(&[[0.0, 20.0], [0.1, 40.0], [1.0, 60.0]]).unwrap();
+        let laws = [
+            (Material::Elastic(Elastic::new(1000.0, 0.3)), 0.0),
+            (Material::J2(J2Plastic::new(20_000.0, 0.3, hard)), 0.0),
+            (Material::Elastic(Elastic::new(1000.0, 0.5)), 7.5),
+        ];
+        for (law, lambda) in &laws {
+            let kappa = law.bulk_modulus().unwrap_or(1e3 * law.shear_modulus());
+            let vol = Volumetric { kappa, lambda: *lambda };
+            for kind in [Some(Formulation::TotalLagrangian), Some(Formulation::UpdatedLagrangian), None] {
+                for j0 in [0.7, 1.3] {
+                    let out = run(kind, law, &uu, vol, j0, true);
+                    let scale = out.kk.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+                    let h = 1e-7;
+                    for j in 0..8 {
+                        let (mut up, mut dn) = (uu, uu);
+                        up[j / 2][j % 2] += h;
+                        dn[j / 2][j % 2] -= h;
+                        let (fp, fm) = (run(kind, law, &up, vol, j0, false).f_int, run(kind, law, &dn, vol, j0, false).f_int);
+                        for i in 0..8 {
+                            let fd = (fp[i] - fm[i]) / (2.0 * h);
+                            assert!((fd - out.kk[i][j]).abs() < 1e-6 * scale, "{law:?} {kind:?} j0={j0}: K[{i}][{j}] = {} vs {fd}", out.kk[i][j]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// How j₀ enters, checked against the formulas of the module docs for a virgin state
+    /// (1e-13 relative: a few roundings): Θ = j₀ v/V, p = κ ln Θ / Θ, and the deviatoric
+    /// Cauchy stress of the law divided by j₀.
+    #[test]
+    fn j0_scales_theta_pressure_and_deviatoric_stress() {
+        let law = Material::Elastic(Elastic::new(1000.0, 0.3));
+        let vol = Volumetric { kappa: law.bulk_modulus().unwrap(), lambda: 0.0 };
+        let uu = [[0.0, 0.0], [0.05, -0.02], [0.08, 0.03], [-0.02, 0.04]];
+        for kind in [Some(Formulation::TotalLagrangian), Some(Formulation::UpdatedLagrangian), None] {
+            let one = run(kind, &law, &uu, vol, 1.0, false);
+            let j0 = 1.25;
+            let two = run(kind, &law, &uu, vol, j0, false);
+            assert!((two.theta - j0 * one.theta).abs() < 1e-13);
+            let p = vol.kappa * two.theta.ln() / two.theta;
+            assert!((two.pressure - p).abs() < 1e-13 * p.abs());
+            for q in 0..4 {
+                for i in 0..4 {
+                    let pi = if i == 2 { 0.0 } else { 1.0 };
+                    let dev1 = one.gauss[q].sig[i] - pi * one.pressure;
+                    let dev2 = two.gauss[q].sig[i] - pi * two.pressure;
+                    assert!((dev2 - dev1 / j0).abs() < 1e-13 * dev1.abs().max(1.0), "{kind:?}");
+                }
+            }
+        }
+    }
+
+    /// A j₀ that is not positive and finite is an error (no panic).
+    #[test]
+    fn invalid_j0() {
+        let law = Material::Elastic(Elastic::new(1000.0, 0.3));
+        let vol = Volumetric { kappa: 833.0, lambda: 0.0 };
+        let old = [MatState::default(); 4];
+        let inc = TimeIncrement { time: 1.0, dt: 1.0 };
+        let mut out = ElementOut::default();
+        for bad in [0.0, -2.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let e = evaluate_j0(Formulation::TotalLagrangian, &law, &XX0, &[[0.0; 2]; 4], &old, inc, vol, bad, true, &mut out);
+            assert!(matches!(e, Err(MaterialError::InvalidVolumeRatio(_))), "{bad}: {e:?}");
+            let mut a = [0.0; N_ENH];
+            let e = evaluate_enhanced_j0(&law, &XX0, &[[0.0; 2]; 4], &old, inc, vol, bad, true, &mut a, &mut out);
+            assert!(matches!(e, Err(MaterialError::InvalidVolumeRatio(_))), "{bad}: {e:?}");
+        }
+    }
 }

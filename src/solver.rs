@@ -139,6 +139,11 @@ pub struct Solution {
     pub fields: ElementFields,
     /// Augmented-Lagrangian multipliers per element (MPa).
     pub lambda: Vec<f64>,
+    /// Initial volume ratio j₀ per element: the volume ratio that the element's reference
+    /// configuration already carries with respect to the original (stress-free-volume) one.
+    /// 1 for a mesh built in the undeformed configuration; set by a re-mesh in a deformed
+    /// configuration (see the module docs of [`crate::element`]). Constant between re-meshes.
+    pub j0: Vec<f64>,
 }
 
 /// A converged but uncommitted step.
@@ -297,7 +302,7 @@ impl Simulation {
         let area0_total: f64 = area0_body.iter().sum();
         // forces below this are round-off: G · L · 1e-13 with L = √(total area)
         let force_floor = 1e-13 * g_max * area0_total.abs().sqrt();
-        let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne] };
+        let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne], j0: vec![1.0; ne] };
         let dynamics = Dynamics::from_model(time.integrator, &model);
         let mut sim = Self {
             trial_fields: ElementFields::new(ne),
@@ -588,12 +593,13 @@ impl Simulation {
         let x = self.coords(u);
         let kk = if tangent { Some(&mut self.kk) } else { None };
         let t0 = Instant::now();
-        self.assembler.assemble(
+        self.assembler.assemble_j0(
             &self.model,
             u,
             &self.sol.fields.states,
             &self.sol.fields.alpha,
             vol,
+            Some(&self.sol.j0),
             inc,
             kk,
             &mut self.f_int,

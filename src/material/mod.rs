@@ -42,6 +42,11 @@ pub use j2::J2Plastic;
 /// `cp_inv` is the inverse plastic right Cauchy–Green tensor C_p⁻¹ (reference configuration,
 /// `[xx, yy, xy, zz]`), identity for a virgin material; the trial elastic left Cauchy–Green
 /// tensor is b_e = F C_p⁻¹ Fᵀ. It carries the combined (plastic + creep) inelastic deformation.
+/// After a re-mesh in a deformed configuration (reference := current, F := I) it holds the
+/// elastic left Cauchy–Green tensor b_e of before, for every law including the elastic one
+/// ([`crate::remesh::state`]); the Kirchhoff stresses of the laws stay per unit volume of the
+/// original configuration (the element divides them by its initial volume ratio j₀, see
+/// [`crate::element`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MatState {
     pub cp_inv: [f64; 4],
@@ -81,6 +86,8 @@ pub enum MaterialError {
     InvertedElement(f64),
     #[error("local return map did not converge (residual {residual:.3e} after {iterations} iterations)")]
     ReturnMapFailed { iterations: usize, residual: f64 },
+    #[error("initial volume ratio j0 = {0:.3e} of the element must be positive and finite")]
+    InvalidVolumeRatio(f64),
 }
 
 /// One constitutive law (see the module docs for the exact contract).

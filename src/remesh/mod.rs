@@ -50,19 +50,27 @@
 //!    [`state::states_from_field`] (C_p⁻¹ := b_e, because the new F = I). The deviatoric
 //!    Kirchhoff stress is then reproduced: to 1e-10 for a homogeneous deformation, with
 //!    second-order convergence for a non-uniform one (`tests/remesh.rs`).
-//! 4. **Elastic law**: [`crate::material::Elastic`] ignores `cp_inv` (it always starts from the
-//!    identity, b = F Fᵀ). After a re-mesh its stress would drop to zero. It must use
-//!    `old.cp_inv` instead of the identity (identical results while `cp_inv` stays the
-//!    identity, as it does for an elastic body that was never re-meshed).
-//! 5. **Volumetric state (Q1/P0)**: the element pressure comes from Θ = v_e/V_e with V_e the
-//!    reference area; on the new mesh Θ = 1, so the pressure would reset to λ_e. The element needs
-//!    a per-element initial volume ratio J₀ (Θ := J₀ v_e/V_e, i.e. the reference area of the
-//!    volumetric part replaced by V_e/J₀). J₀ is transferred as a field: ln Θ_old, constant per
+//! 4. **Elastic law** (done): [`crate::material::Elastic`] starts from `old.cp_inv`
+//!    (b = F C_p⁻¹ Fᵀ), so the pushed-forward C_p⁻¹ := b_e carries its stress; identical
+//!    results while `cp_inv` stays the identity, as it does for an elastic body that was never
+//!    re-meshed.
+//! 5. **Volumetric state (Q1/P0)** (the element side is done): the element pressure comes from
+//!    Θ = j₀ v_e/V_e with V_e the reference area and j₀ the per-element initial volume ratio
+//!    `sol.j0` ([`crate::solver::Solution::j0`], 1 by default); on the new mesh v_e = V_e, so
+//!    j₀ := Θ_old keeps the pressure. j₀ also divides the laws' deviatoric Kirchhoff stress
+//!    (the laws' stresses are per unit original volume; see the module docs of
+//!    [`crate::element`]): without it the deviatoric Cauchy stress of a re-meshed element
+//!    would be J_old times too large. J₀ is transferred as a field: ln Θ_old, constant per
 //!    old element, repeated at its four Gauss points, transferred with
 //!    [`FieldTransfer::quadrature_field_lumped`] and averaged over the four Gauss points of
 //!    each new element (P0). The lumped (bounded) projection is preferred for these
 //!    element-wise constant data, which jump from element to element: the consistent
-//!    projection overshoots at jumps (see [`transfer`]).
+//!    projection overshoots at jumps (see [`transfer`]). With the states of item 3 and j₀ the
+//!    Cauchy stress, pressure and internal force of a homogeneously deformed element are
+//!    reproduced to 1e-10, and a further increment gives the same result as on the old mesh
+//!    (`tests/rereference.rs`). Still to do at the re-mesh: the mass of an implicit dynamic
+//!    analysis (density per unit new reference area ρ/j₀) and the solver's volume-error
+//!    report, which compares with the areas at start-up.
 //! 6. **Augmented-Lagrangian multipliers** λ_e (`sol.lambda`, incompressible bodies): a pressure
 //!    per element, transferred like ln Θ (Gauss-point field, then element average). After the
 //!    transfer the first step runs its Uzawa updates as usual, from the transferred λ_e.
