@@ -27,7 +27,7 @@ pub struct Body {
     pub elem_offset: usize,
 }
 
-/// A prescribed displacement component: u[dof] = value · amplitude(t).
+/// A prescribed displacement component: `u[dof] = value · amplitude(t)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PrescribedDof {
     pub dof: usize,

@@ -31,6 +31,10 @@
 //!    many points were outside and how far.
 //!
 //! ## Plan for the integration into the solver (not done here)
+//! [`body::transfer_body`] does items 3, 5 and 6 below for one particle (material states, j₀,
+//! λ_e), tested exact for a homogeneous history; what is left is the solver's side: the trigger,
+//! rebuilding the model's arrays and the contact, and re-equilibrating.
+//!
 //! At a re-mesh of body b at the end of a committed step (the solver is not modified by this
 //! module; this is the list of what it has to carry over):
 //! 1. **Trigger**: [`monitor::check_quality`] on the body's mesh with the current coordinates
@@ -99,6 +103,7 @@
 // `!(x > 0.0)` is used on purpose: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod body;
 pub mod locate;
 pub mod monitor;
 pub mod state;
@@ -107,6 +112,7 @@ pub mod transfer;
 use crate::mesh::Mesh;
 use thiserror::Error;
 
+pub use body::{transfer_body, BodyState, BodyTransfer};
 pub use locate::{Location, PointLocator};
 pub use monitor::{check_quality, QualityCheck, QualityLimits, QualityMeasure, Worst};
 pub use state::{deformation_gradient, state_from_components, state_to_components, states_from_field, states_to_field, STATE_COMPONENTS};
