@@ -13,6 +13,10 @@ pub enum ModelError {
     Mesh { body: usize, name: String, message: String },
     #[error("{key}: edge set \"{set}\" does not exist on body \"{body}\"")]
     MissingSet { key: String, body: String, set: String },
+    #[error("body {body} cannot be re-meshed: {what} refer to its nodes")]
+    RemeshConstrained { body: String, what: &'static str },
+    #[error("no body {0}")]
+    NoBody(usize),
 }
 
 /// One meshed body.
@@ -248,6 +252,74 @@ impl Model {
             && self.loads.iter().all(|l| !matches!(l.kind, LoadKind::Pressure(_)))
             && (!contact || (frictionless(&self.contact.kind) && self.walls.iter().all(|w| frictionless(&w.kind))))
             && (!contact || self.contact.method != crate::case::ContactMethod::Lagrange)
+    }
+
+    /// The model with body `b` meshed by `mesh` instead (a re-mesh: `mesh.nodes` are the new
+    /// reference coordinates, normally the body's current configuration). The other bodies keep
+    /// their meshes and reference coordinates; the global numbering is rebuilt, so node n of
+    /// body c moves from `self.bodies[c].node_offset + n` to `new.bodies[c].node_offset + n`
+    /// (and the same for elements), and prescribed dofs, loads and output groups are renumbered.
+    ///
+    /// # Errors
+    /// [`ModelError::NoBody`] for a body index out of range, and
+    /// [`ModelError::RemeshConstrained`] when prescribed displacements, loads or output groups
+    /// refer to nodes of body `b` (they are defined on its old boundary edge sets).
+    pub fn with_body_mesh(&self, b: usize, mesh: Mesh) -> Result<Model, ModelError> {
+        let old = self.bodies.get(b).ok_or(ModelError::NoBody(b))?;
+        let (lo, hi) = (old.node_offset, old.node_offset + old.mesh.n_nodes());
+        let inside = |n: usize| (lo..hi).contains(&n);
+        let refuse = |what| Err(ModelError::RemeshConstrained { body: old.name.clone(), what });
+        if self.prescribed.iter().any(|p| inside(p.dof / 2)) {
+            return refuse("prescribed displacements");
+        }
+        if self.loads.iter().any(|l| l.edges.iter().flatten().any(|&n| inside(n))) {
+            return refuse("loads");
+        }
+        if self.reaction_groups.iter().chain(&self.displacement_groups).any(|g| g.nodes.iter().any(|&n| inside(n))) {
+            return refuse("output groups");
+        }
+        let mut new = self.clone();
+        new.bodies[b].mesh = mesh;
+        let (mut x0, mut elements, mut elem_material, mut elem_body) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        // old global node -> new global node, for the nodes of the other bodies
+        let mut renumber = vec![usize::MAX; self.x0.len()];
+        for (ib, body) in new.bodies.iter_mut().enumerate() {
+            let (node_offset, elem_offset) = (x0.len(), elements.len());
+            if ib == b {
+                x0.extend_from_slice(&body.mesh.nodes);
+            } else {
+                let n = body.mesh.n_nodes();
+                x0.extend_from_slice(&self.x0[body.node_offset..body.node_offset + n]);
+                for k in 0..n {
+                    renumber[body.node_offset + k] = node_offset + k;
+                }
+            }
+            for e in &body.mesh.elements {
+                elements.push(e.map(|n| n + node_offset));
+                elem_material.push(body.material);
+                elem_body.push(ib);
+            }
+            body.node_offset = node_offset;
+            body.elem_offset = elem_offset;
+        }
+        for p in &mut new.prescribed {
+            p.dof = 2 * renumber[p.dof / 2] + p.dof % 2;
+        }
+        for l in &mut new.loads {
+            for e in &mut l.edges {
+                *e = e.map(|n| renumber[n]);
+            }
+        }
+        for g in new.reaction_groups.iter_mut().chain(new.displacement_groups.iter_mut()) {
+            for n in &mut g.nodes {
+                *n = renumber[*n];
+            }
+        }
+        new.x0 = x0;
+        new.elements = elements;
+        new.elem_material = elem_material;
+        new.elem_body = elem_body;
+        Ok(new)
     }
 
     /// Reference area of each body (mm²).

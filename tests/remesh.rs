@@ -240,3 +240,46 @@ fn remesh_particle_keeps_boundary_and_area_and_passes_the_monitor() {
     let worst = (0..exact.n_points()).map(|i| (moved.point(i)[0] - exact.point(i)[0]).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-10 * 10.0, "linear field error {worst:.3e}");
 }
+
+/// `Model::with_body_mesh`: one particle of the 2 × 2 disc job replaced by a new mesh of its
+/// boundary (here in the reference configuration): the other bodies keep their nodes, in the
+/// new numbering (exact), every body keeps its area (1e-12), the element lists and offsets
+/// are consistent; a body with prescribed displacements is refused with an error naming it.
+#[test]
+fn model_with_a_remeshed_body() {
+    use mpfem::case;
+    use mpfem::model::{Model, ModelError};
+    let c = case::load(std::path::Path::new("jobs/compaction/discs_2x2_lateral.toml")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let b = 1;
+    let body = &model.bodies[b];
+    let coords = &model.x0[body.node_offset..body.node_offset + body.mesh.n_nodes()];
+    let mesh = remesh::remesh_particle(&body.mesh, coords, 0.7).unwrap();
+    let n_new = mesh.n_nodes();
+    let new = model.with_body_mesh(b, mesh).unwrap();
+    assert_eq!(new.bodies[b].mesh.n_nodes(), n_new);
+    let a0 = model.body_areas(&model.x0);
+    let a1 = new.body_areas(&new.x0);
+    for (x, y) in a0.iter().zip(&a1) {
+        assert!(((x - y) / x).abs() < 1e-12, "areas {a0:?} vs {a1:?}");
+    }
+    for (c, (ob, nb)) in model.bodies.iter().zip(&new.bodies).enumerate() {
+        if c != b {
+            for k in 0..ob.mesh.n_nodes() {
+                assert_eq!(model.x0[ob.node_offset + k], new.x0[nb.node_offset + k]);
+            }
+        }
+        for (e, el) in nb.mesh.elements.iter().enumerate() {
+            assert_eq!(new.elements[nb.elem_offset + e], el.map(|n| n + nb.node_offset));
+            assert_eq!(new.elem_body[nb.elem_offset + e], c);
+        }
+    }
+    assert_eq!(new.x0.len(), new.bodies.iter().map(|b| b.mesh.n_nodes()).sum::<usize>());
+    // a body held by prescribed displacements cannot be re-meshed
+    let c = case::load(std::path::Path::new("jobs/verification/patch_test.toml")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let body = &model.bodies[0];
+    let err = model.with_body_mesh(0, body.mesh.clone()).unwrap_err();
+    assert!(matches!(err, ModelError::RemeshConstrained { what: "prescribed displacements", .. }), "{err}");
+    assert!(err.to_string().contains(&body.name), "{err}");
+}
