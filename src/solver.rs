@@ -50,6 +50,8 @@ pub enum SolveError {
     TooManySteps(usize),
     #[error("linear solver setup: {0}")]
     Linear(#[from] LinalgError),
+    #[error("re-meshing body {body}: {reason}")]
+    Remesh { body: usize, reason: String },
 }
 
 /// One converged step, as reported to observers and written to the history.
@@ -369,6 +371,83 @@ impl Simulation {
 
     pub fn n_free(&self) -> usize {
         self.assembler.n_free
+    }
+
+    /// Re-mesh body `b` in its current configuration with elements of size about `h` (mm)
+    /// and carry the solution over ([`crate::remesh`]): the new mesh keeps every boundary point
+    /// of the old one (area and contact surface unchanged), its reference configuration is the
+    /// current one (u = 0 on its nodes, the last step's increment moved by nodal transfer so
+    /// that the inertial stabilisation keeps its anchor), and the material states, initial
+    /// volume ratios and element pressures are transferred ([`crate::remesh::transfer_body`]).
+    /// Everything else is rebuilt for the new numbering; the other bodies keep their solution.
+    /// The run's counters, energies and initial areas (for the volume error) are kept.
+    /// Contact history is not carried over: frictionless penalty contact has none, the
+    /// augmented-Lagrangian multipliers start again at the next step, stick points are lost.
+    ///
+    /// # Errors
+    /// [`SolveError::Remesh`] for an implicit dynamic analysis (velocities and accelerations
+    /// are not transferred), a body held by boundary conditions, loads or output groups, or a
+    /// boundary the mesher refuses.
+    pub fn remesh_body(&mut self, b: usize, h: f64) -> Result<crate::remesh::BodyTransfer, SolveError> {
+        let fail = |reason: String| SolveError::Remesh { body: b, reason };
+        if self.dynamics.is_some() {
+            return Err(fail("implicit dynamics: velocities and accelerations are not transferred".into()));
+        }
+        let body = self.model.bodies.get(b).ok_or_else(|| fail("no such body".into()))?;
+        let (n0, nn) = (body.node_offset, body.mesh.n_nodes());
+        let (e0, ne) = (body.elem_offset, body.mesh.n_elements());
+        let x = self.coords(&self.sol.u);
+        let (xb0, xb) = (&self.model.x0[n0..n0 + nn], &x[n0..n0 + nn]);
+        let new_mesh = crate::remesh::remesh_particle(&body.mesh, xb, h).map_err(|e| fail(e.to_string()))?;
+        let old_state = crate::remesh::BodyState {
+            states: self.sol.fields.states[e0..e0 + ne].to_vec(),
+            j0: self.sol.j0[e0..e0 + ne].to_vec(),
+            lambda: self.sol.lambda[e0..e0 + ne].to_vec(),
+        };
+        let moved = crate::remesh::transfer_body(&body.mesh, xb0, xb, &old_state, &new_mesh).map_err(|e| fail(e.to_string()))?;
+        // the last step's increment u_n − u_{n−1} of the body, at the new nodes
+        let incr: Vec<f64> = (0..nn).flat_map(|k| (0..2).map(move |c| 2 * (n0 + k) + c)).map(|d| self.sol.u[d] - self.u_prev[d]).collect();
+        let mut nodal = crate::remesh::FieldTransfer::new(&body.mesh, xb, &new_mesh, &new_mesh.nodes).map_err(|e| fail(e.to_string()))?;
+        let incr_new = nodal.nodal_field(&crate::remesh::NodalField { n_comp: 2, values: incr }).map_err(|e| fail(e.to_string()))?;
+        let model = self.model.with_body_mesh(b, new_mesh).map_err(|e| fail(e.to_string()))?;
+        let mut next = Simulation::new(model, self.time, self.spec)?;
+        // the solution: other bodies renumbered, the re-meshed body from the transfer
+        for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
+            if c == b {
+                for k in 0..nb.mesh.n_nodes() {
+                    for d in 0..2 {
+                        next.u_prev[2 * (nb.node_offset + k) + d] = -incr_new.values[2 * k + d];
+                    }
+                }
+                let r = nb.elem_offset..nb.elem_offset + nb.mesh.n_elements();
+                next.sol.fields.states[r.clone()].copy_from_slice(&moved.state.states);
+                next.sol.j0[r.clone()].copy_from_slice(&moved.state.j0);
+                next.sol.lambda[r].copy_from_slice(&moved.state.lambda);
+                continue;
+            }
+            let (src, dst, n) = (2 * ob.node_offset, 2 * nb.node_offset, 2 * ob.mesh.n_nodes());
+            next.sol.u[dst..dst + n].copy_from_slice(&self.sol.u[src..src + n]);
+            next.u_prev[dst..dst + n].copy_from_slice(&self.u_prev[src..src + n]);
+            let (src, dst, n) = (ob.elem_offset, nb.elem_offset, ob.mesh.n_elements());
+            next.sol.fields.states[dst..dst + n].copy_from_slice(&self.sol.fields.states[src..src + n]);
+            next.sol.fields.sig[dst..dst + n].copy_from_slice(&self.sol.fields.sig[src..src + n]);
+            next.sol.j0[dst..dst + n].copy_from_slice(&self.sol.j0[src..src + n]);
+            next.sol.lambda[dst..dst + n].copy_from_slice(&self.sol.lambda[src..src + n]);
+        }
+        next.sol.time = self.sol.time;
+        next.dt_prev = self.dt_prev;
+        next.step = self.step;
+        next.total_iterations = self.total_iterations;
+        next.total_cutbacks = self.total_cutbacks;
+        next.stab_energy = self.stab_energy;
+        next.work_ext = self.work_ext;
+        next.last_wall_force.clone_from(&self.last_wall_force);
+        next.area0_body.clone_from(&self.area0_body);
+        next.area0_total = self.area0_total;
+        next.force_floor = self.force_floor;
+        next.timing = self.timing.clone();
+        *self = next;
+        Ok(moved)
     }
 
     pub fn linear_solver_name(&self) -> &str {

@@ -283,3 +283,48 @@ fn model_with_a_remeshed_body() {
     assert!(matches!(err, ModelError::RemeshConstrained { what: "prescribed displacements", .. }), "{err}");
     assert!(err.to_string().contains(&body.name), "{err}");
 }
+
+/// `Simulation::remesh_body` in the middle of a compaction: two copies of the 2 × 2 lateral disc
+/// job (J2 aluminium, penalty contact), at mesh size 2 mm, run to solid ratio 0.85
+/// identically; one re-meshes a disc at the same size. The particle areas are unchanged
+/// (1e-12), and after one more step (dt = 0.01 s) the wall forces of the two agree to the
+/// issue's 1 % (measured 0.43 % and 0.10 %). Not yet met: "re-converges in a few Newton
+/// iterations": that step takes 24 iterations against 5, because the transferred state is not
+/// re-equilibrated before it (the next piece of work); it is printed, not asserted. At the
+/// job's own 4 mm the forces differ by 1.4 % (a coarse re-mesh is a different discretisation),
+/// at 6 mm by 5 %.
+#[test]
+fn remeshing_a_disc_mid_run_keeps_the_wall_forces() {
+    use mpfem::case;
+    use mpfem::model::Model;
+    use mpfem::solver::Simulation;
+    let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
+    let path = std::env::temp_dir().join(format!("remesh_mid_run_{}.toml", std::process::id()));
+    std::fs::write(&path, text.replace("mesh_size = 4.0", "mesh_size = 2.0")).unwrap();
+    let c = case::load(&path).unwrap();
+    let mk = || Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
+    let (mut a, mut b) = (mk(), mk());
+    let mut phi = 0.0;
+    while phi < 0.85 {
+        let ra = a.advance(c.time.dt).unwrap();
+        b.advance(c.time.dt).unwrap();
+        phi = ra.compaction.unwrap().solid_ratio;
+    }
+    let areas_before = b.model.body_areas(&b.coords(&b.sol.u));
+    let h = c.bodies[0].mesh_size;
+    let moved = b.remesh_body(0, h).unwrap();
+    assert!(moved.area.relative_change.abs() < 1e-12, "{:?}", moved.area);
+    let areas_after = b.model.body_areas(&b.coords(&b.sol.u));
+    for (x, y) in areas_before.iter().zip(&areas_after) {
+        assert!(((x - y) / x).abs() < 1e-12, "{areas_before:?} vs {areas_after:?}");
+    }
+    let ra = a.advance(0.01).unwrap();
+    let rb = b.advance(0.01).unwrap();
+    let _ = std::fs::remove_file(&path);
+    let (fa, fb) = (ra.compaction.unwrap().force, rb.compaction.unwrap().force);
+    eprintln!("phi {phi:.4}: forces {fa:?} vs {fb:?}, iterations {} vs {}", ra.newton_iterations, rb.newton_iterations);
+    for w in 0..4 {
+        let scale = fa.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+        assert!((fa[w] - fb[w]).abs() <= 0.01 * scale, "wall {w}: {} vs {} N/mm", fa[w], fb[w]);
+    }
+}
