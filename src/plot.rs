@@ -795,16 +795,22 @@ pub fn stress_range(snap: &Snapshot) -> (f64, f64) {
     (lo, hi)
 }
 
-fn draw_snapshot<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    snap: &Snapshot,
-    title: &[String],
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+/// `root` cleared to white with the lines of `title` stacked on top; the area below them.
+fn titled_area<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &[String]) -> Result<DrawingArea<DB, Shift>, DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
     let mut body = root.clone();
     for line in title {
         body = body.titled(line, ("sans-serif", 20))?;
     }
+    Ok(body)
+}
+
+fn draw_snapshot<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    snap: &Snapshot,
+    title: &[String],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let body = titled_area(root, title)?;
     let (w, _) = body.dim_in_pixel();
     let (left, right) = body.split_horizontally(w.saturating_sub(COLOUR_BAR_PANEL));
 
@@ -934,11 +940,7 @@ fn draw_packing<DB: DrawingBackend>(
     die: Option<[f64; 4]>,
     title: &[String],
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    root.fill(&WHITE)?;
-    let mut body = root.clone();
-    for line in title {
-        body = body.titled(line, ("sans-serif", 20))?;
-    }
+    let body = titled_area(root, title)?;
     let mut bb = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
     let die_pts = die.map(|d| vec![[d[0], d[2]], [d[1], d[3]]]).unwrap_or_default();
     for [x, y] in particles.iter().flat_map(|p| p.outline.iter().copied()).chain(die_pts) {

@@ -404,11 +404,10 @@ impl Simulation {
             j0: self.sol.j0[e0..e0 + ne].to_vec(),
             lambda: self.sol.lambda[e0..e0 + ne].to_vec(),
         };
-        let moved = crate::remesh::transfer_body(&body.mesh, xb0, xb, &old_state, &new_mesh).map_err(|e| fail(e.to_string()))?;
-        // the last step's increment u_n − u_{n−1} of the body, at the new nodes
-        let incr: Vec<f64> = (0..nn).flat_map(|k| (0..2).map(move |c| 2 * (n0 + k) + c)).map(|d| self.sol.u[d] - self.u_prev[d]).collect();
-        let mut nodal = crate::remesh::FieldTransfer::new(&body.mesh, xb, &new_mesh, &new_mesh.nodes).map_err(|e| fail(e.to_string()))?;
-        let incr_new = nodal.nodal_field(&crate::remesh::NodalField { n_comp: 2, values: incr }).map_err(|e| fail(e.to_string()))?;
+        // the last step's increment u_n − u_{n−1} of the body goes to the new nodes too
+        let incr = crate::remesh::NodalField { n_comp: 2, values: (2 * n0..2 * (n0 + nn)).map(|d| self.sol.u[d] - self.u_prev[d]).collect() };
+        let mut moved = crate::remesh::transfer_body(&body.mesh, xb0, xb, &old_state, &[incr], &new_mesh).map_err(|e| fail(e.to_string()))?;
+        let incr_new = moved.nodal.pop().ok_or_else(|| fail("the increment was not transferred".into()))?;
         let model = self.model.with_body_mesh(b, new_mesh).map_err(|e| fail(e.to_string()))?;
         let mut next = Simulation::new(model, self.time, self.spec)?;
         // the solution: other bodies renumbered, the re-meshed body from the transfer

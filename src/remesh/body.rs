@@ -18,7 +18,7 @@
 //! a non-uniform one the accuracy is that of the transfer (second order for the states, see
 //! [`super::transfer`]).
 
-use super::{area_check, states_from_field, states_to_field, AreaCheck, FieldTransfer, QuadField, RemeshError, TransferStats};
+use super::{area_check, states_from_field, states_to_field, AreaCheck, FieldTransfer, NodalField, QuadField, RemeshError, TransferStats};
 use crate::material::MatState;
 use crate::mesh::Mesh;
 
@@ -40,15 +40,19 @@ pub struct BodyTransfer {
     pub quadrature: TransferStats,
     /// Old (current configuration) and new areas.
     pub area: AreaCheck,
+    /// The nodal fields given to [`transfer_body`], interpolated at the new nodes (same order).
+    pub nodal: Vec<NodalField>,
 }
 
 /// Carry `old_state` of a particle meshed by `old` (reference coordinates `x0_old`, current
-/// `x_old`) over to `new` (nodes in the current configuration).
+/// `x_old`) over to `new` (nodes in the current configuration), and the nodal fields `nodal`
+/// of the old nodes (displacement increments, velocities) to the new nodes, with one point
+/// location and one projector for all of them.
 ///
 /// # Errors
 /// Inconsistent sizes (states, j₀ or λ not one per old element), invalid meshes or
 /// coordinates, an inverted old element, an inadmissible old state.
-pub fn transfer_body(old: &Mesh, x0_old: &[[f64; 2]], x_old: &[[f64; 2]], old_state: &BodyState, new: &Mesh) -> Result<BodyTransfer, RemeshError> {
+pub fn transfer_body(old: &Mesh, x0_old: &[[f64; 2]], x_old: &[[f64; 2]], old_state: &BodyState, nodal: &[NodalField], new: &Mesh) -> Result<BodyTransfer, RemeshError> {
     let ne = old.elements.len();
     for (what, got) in [("old states", old_state.states.len()), ("old j0", old_state.j0.len()), ("old lambda", old_state.lambda.len())] {
         if got != ne {
@@ -84,8 +88,9 @@ pub fn transfer_body(old: &Mesh, x0_old: &[[f64; 2]], x_old: &[[f64; 2]], old_st
         j0[e] = ln_t.exp();
         lambda[e] = lam;
     }
+    let nodal = nodal.iter().map(|f| transfer.nodal_field(f)).collect::<Result<Vec<_>, _>>()?;
     let area = area_check(old, x_old, new, &new.nodes)?;
-    Ok(BodyTransfer { state: BodyState { states, j0, lambda }, quadrature: transfer.quadrature_stats(), area })
+    Ok(BodyTransfer { state: BodyState { states, j0, lambda }, quadrature: transfer.quadrature_stats(), area, nodal })
 }
 
 #[cfg(test)]
@@ -109,7 +114,7 @@ mod tests {
         let ne = old.elements.len();
         let old_state = BodyState { states: vec![[st; 4]; ne], j0: vec![1.1; ne], lambda: vec![3.0; ne] };
         let new = super::super::remesh_particle(&old, &x_old, 1.5).unwrap();
-        let out = transfer_body(&old, &old.nodes, &x_old, &old_state, &new).unwrap();
+        let out = transfer_body(&old, &old.nodes, &x_old, &old_state, &[], &new).unwrap();
         assert!(out.area.relative_change.abs() < 1e-12, "{:?}", out.area);
         // b_e = F C_p⁻¹ Fᵀ (in-plane block), zz unchanged (F₃₃ = 1)
         let c = [[cp[0], cp[2]], [cp[2], cp[1]]];
@@ -144,7 +149,7 @@ mod tests {
         let old = shapes::disc([0.0, 0.0], 5.0, 1.0);
         let ne = old.elements.len();
         let bad = BodyState { states: vec![[MatState::default(); 4]; ne], j0: vec![1.0; ne - 1], lambda: vec![0.0; ne] };
-        let e = transfer_body(&old, &old.nodes, &old.nodes, &bad, &old).unwrap_err();
+        let e = transfer_body(&old, &old.nodes, &old.nodes, &bad, &[], &old).unwrap_err();
         assert!(matches!(e, RemeshError::SizeMismatch { what: "old j0", .. }), "{e}");
     }
 }
