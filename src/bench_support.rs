@@ -51,13 +51,14 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         walls: vec![],
         contact: Default::default(),
         stop: Default::default(),
+        remesh: Default::default(),
         materials: vec![material.clone()],
         densities: vec![2.7e-9],
         x0: mesh.nodes.clone(),
         elements: mesh.elements.clone(),
         elem_material: vec![0; ne],
         elem_body: vec![0; ne],
-        bodies: vec![crate::model::Body { name: "block".into(), mesh, material: 0, node_offset: 0, elem_offset: 0 }],
+        bodies: vec![crate::model::Body { name: "block".into(), mesh, material: 0, node_offset: 0, elem_offset: 0, mesh_size: 1.0 }],
         prescribed: bottom
             .iter()
             .flat_map(|&n| [2 * n, 2 * n + 1])

@@ -105,6 +105,8 @@ pub struct Case {
     /// Contact settings (used when there are walls or several bodies).
     pub contact: ContactSpec,
     pub stop: StopSpec,
+    /// Adaptive re-meshing of the particles (`[remesh]`).
+    pub remesh: RemeshSpec,
     /// Directory of the case file; relative paths in the file are resolved against it.
     pub base_dir: PathBuf,
 }
@@ -251,6 +253,27 @@ pub struct StopSpec {
     pub jam: bool,
     /// A failed step counts as a jam only at or above this solid ratio (default 0.9).
     pub jam_solid_ratio: f64,
+}
+
+/// The `[remesh]` table: adaptive re-meshing of deformed particles (see [`crate::remesh`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemeshSpec {
+    /// Re-mesh a particle whose mesh crosses the quality limits after a converged step, and
+    /// re-mesh and retry a step that inverts an element.
+    pub enabled: bool,
+    /// The quality limits (scaled Jacobian, aspect ratio, smallest corner angle).
+    pub limits: crate::remesh::QualityLimits,
+    /// Target element size of the new meshes (mm); `None`: each body's own `mesh_size`.
+    pub mesh_size: Option<f64>,
+    /// Largest number of re-meshes in one run (all particles together); past it the run goes
+    /// on without re-meshing.
+    pub max_remeshes: usize,
+}
+
+impl Default for RemeshSpec {
+    fn default() -> Self {
+        Self { enabled: false, limits: crate::remesh::QualityLimits::default(), mesh_size: None, max_remeshes: 10_000 }
+    }
 }
 
 /// A named material.
@@ -812,6 +835,18 @@ mod raw {
         pub packings: Option<Vec<PackingRaw>>,
         pub imports: Option<Vec<ImportRaw>>,
         pub stop: Option<StopRaw>,
+        pub remesh: Option<RemeshRaw>,
+    }
+
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct RemeshRaw {
+        pub enabled: Option<bool>,
+        pub min_scaled_jacobian: Option<f64>,
+        pub max_aspect_ratio: Option<f64>,
+        pub min_angle: Option<f64>,
+        pub mesh_size: Option<f64>,
+        pub max_remeshes: Option<i64>,
     }
 
     #[derive(Deserialize)]
@@ -1492,6 +1527,10 @@ impl Cx<'_> {
         }
         let output = self.output(r.output, &bodies)?;
 
+        let remesh = match r.remesh {
+            None => RemeshSpec::default(),
+            Some(m) => self.remesh(m, &time)?,
+        };
         Ok(Case {
             title,
             formulation,
@@ -1506,8 +1545,35 @@ impl Cx<'_> {
             walls,
             contact,
             stop,
+            remesh,
             base_dir: self.base_dir.to_path_buf(),
         })
+    }
+
+    fn remesh(&self, m: raw::RemeshRaw, time: &TimeSpec) -> Result<RemeshSpec, CaseError> {
+        let mut spec = RemeshSpec { enabled: m.enabled.unwrap_or(true), ..RemeshSpec::default() };
+        if let Some(v) = m.min_scaled_jacobian {
+            spec.limits.min_scaled_jacobian = self.num("remesh.min_scaled_jacobian", v, v > 0.0 && v < 1.0, "a scaled Jacobian in (0, 1)")?;
+        }
+        if let Some(v) = m.max_aspect_ratio {
+            spec.limits.max_aspect_ratio = self.num("remesh.max_aspect_ratio", v, v > 1.0, "an aspect ratio > 1")?;
+        }
+        if let Some(v) = m.min_angle {
+            spec.limits.min_angle_deg = self.num("remesh.min_angle", v, v > 0.0 && v < 90.0, "an angle in degrees in (0, 90)")?;
+        }
+        if let Some(v) = m.mesh_size {
+            spec.mesh_size = Some(self.positive("remesh.mesh_size", v, "an element size (mm)")?);
+        }
+        if let Some(v) = m.max_remeshes {
+            spec.max_remeshes = self.count("remesh.max_remeshes", v, 0)?;
+        }
+        if spec.enabled && time.integrator.is_dynamic() {
+            return Err(self.err(
+                "remesh.enabled",
+                "value true with an implicit dynamic analysis (time.integrator): velocities and accelerations are not transferred to a new mesh; expected enabled = false or a quasi-static analysis",
+            ));
+        }
+        Ok(spec)
     }
 
     // ---- materials ----------------------------------------------------------------------

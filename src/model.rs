@@ -29,6 +29,9 @@ pub struct Body {
     pub node_offset: usize,
     /// Global index of the body's element 0.
     pub elem_offset: usize,
+    /// Target element edge length of the body's mesh (mm): the case's `mesh_size`, used again
+    /// when the body is re-meshed.
+    pub mesh_size: f64,
 }
 
 /// A prescribed displacement component: `u[dof] = value · amplitude(t)`.
@@ -66,6 +69,7 @@ pub struct Model {
     pub walls: Vec<crate::case::WallSpec>,
     pub contact: crate::case::ContactSpec,
     pub stop: crate::case::StopSpec,
+    pub remesh: crate::case::RemeshSpec,
     pub materials: Vec<Material>,
     /// Mass density of each material (t/mm³), used by the implicit dynamics.
     pub densities: Vec<f64>,
@@ -131,7 +135,7 @@ impl Model {
                 elem_material.push(b.material);
                 elem_body.push(ib);
             }
-            bodies.push(Body { name: b.name.clone(), mesh, material: b.material, node_offset, elem_offset });
+            bodies.push(Body { name: b.name.clone(), mesh, material: b.material, node_offset, elem_offset, mesh_size: b.mesh_size });
         }
 
         let mut amplitudes: Vec<Amplitude> = Vec::new();
@@ -213,6 +217,7 @@ impl Model {
             walls: case.walls.clone(),
             contact: case.contact.clone(),
             stop: case.stop.clone(),
+            remesh: case.remesh.clone(),
             materials: case.materials.iter().map(|m| m.material.clone()).collect(),
             densities: case.materials.iter().map(|m| m.density).collect(),
             bodies,
@@ -254,6 +259,25 @@ impl Model {
             && (!contact || self.contact.method != crate::case::ContactMethod::Lagrange)
     }
 
+    /// Why body `b` cannot be re-meshed (its nodes are named by prescribed displacements,
+    /// loads or output groups, whose node lists would lose their meaning), or `None` when it
+    /// can (also for a body index out of range: [`Model::with_body_mesh`] reports that).
+    pub fn remesh_constraint(&self, b: usize) -> Option<&'static str> {
+        let body = self.bodies.get(b)?;
+        let (lo, hi) = (body.node_offset, body.node_offset + body.mesh.n_nodes());
+        let inside = |n: usize| (lo..hi).contains(&n);
+        if self.prescribed.iter().any(|p| inside(p.dof / 2)) {
+            return Some("prescribed displacements");
+        }
+        if self.loads.iter().any(|l| l.edges.iter().flatten().any(|&n| inside(n))) {
+            return Some("loads");
+        }
+        if self.reaction_groups.iter().chain(&self.displacement_groups).any(|g| g.nodes.iter().any(|&n| inside(n))) {
+            return Some("output groups");
+        }
+        None
+    }
+
     /// The model with body `b` meshed by `mesh` instead (a re-mesh: `mesh.nodes` are the new
     /// reference coordinates, normally the body's current configuration). The other bodies keep
     /// their meshes and reference coordinates; the global numbering is rebuilt, so node n of
@@ -266,17 +290,8 @@ impl Model {
     /// refer to nodes of body `b` (they are defined on its old boundary edge sets).
     pub fn with_body_mesh(&self, b: usize, mesh: Mesh) -> Result<Model, ModelError> {
         let old = self.bodies.get(b).ok_or(ModelError::NoBody(b))?;
-        let (lo, hi) = (old.node_offset, old.node_offset + old.mesh.n_nodes());
-        let inside = |n: usize| (lo..hi).contains(&n);
-        let refuse = |what| Err(ModelError::RemeshConstrained { body: old.name.clone(), what });
-        if self.prescribed.iter().any(|p| inside(p.dof / 2)) {
-            return refuse("prescribed displacements");
-        }
-        if self.loads.iter().any(|l| l.edges.iter().flatten().any(|&n| inside(n))) {
-            return refuse("loads");
-        }
-        if self.reaction_groups.iter().chain(&self.displacement_groups).any(|g| g.nodes.iter().any(|&n| inside(n))) {
-            return refuse("output groups");
+        if let Some(what) = self.remesh_constraint(b) {
+            return Err(ModelError::RemeshConstrained { body: old.name.clone(), what });
         }
         let mut new = self.clone();
         new.bodies[b].mesh = mesh;

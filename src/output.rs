@@ -52,6 +52,7 @@ pub fn history_columns(model: &Model) -> Vec<String> {
         "volume_error_max_body",
         "max_element_volume_change",
         "kinetic_energy",
+        "remeshes",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -119,6 +120,7 @@ pub fn history_values(r: &StepReport) -> Vec<f64> {
         r.volume_error_max_body,
         r.max_element_volume_change,
         r.kinetic_energy,
+        r.remeshes as f64,
     ];
     if let Some(c) = &r.compaction {
         v.push(c.solid_ratio);
@@ -172,18 +174,21 @@ pub struct Phases {
     pub contact_assembly: f64,
     pub element_assembly: f64,
     pub linear_solve: f64,
+    /// New meshes, state transfer and solver rebuilds of the re-meshed particles (their
+    /// re-equilibration is in the assembly and solve phases).
+    pub remesh: f64,
     /// history.csv and results.h5/xdmf.
     pub output: f64,
     /// Everything else (set-up, predictors, bookkeeping).
     pub other: f64,
     pub total: f64,
     /// Each phase's share of `total` (%), same order as above.
-    pub percent: [f64; 6],
+    pub percent: [f64; 7],
 }
 
 impl Phases {
     pub fn split(t: &crate::solver::Timing, output: f64, total: f64) -> Self {
-        let parts = [t.contact_search, t.contact_assembly, t.element_assembly, t.linear_solve, output];
+        let parts = [t.contact_search, t.contact_assembly, t.element_assembly, t.linear_solve, t.remesh, output];
         let other = (total - parts.iter().sum::<f64>()).max(0.0);
         let share = |v: f64| if total > 0.0 { 100.0 * v / total } else { 0.0 };
         Self {
@@ -191,10 +196,11 @@ impl Phases {
             contact_assembly: parts[1],
             element_assembly: parts[2],
             linear_solve: parts[3],
+            remesh: parts[4],
             output,
             other,
             total,
-            percent: [share(parts[0]), share(parts[1]), share(parts[2]), share(parts[3]), share(output), share(other)],
+            percent: [share(parts[0]), share(parts[1]), share(parts[2]), share(parts[3]), share(parts[4]), share(output), share(other)],
         }
     }
 }

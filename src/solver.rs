@@ -81,6 +81,9 @@ pub struct StepReport {
     pub compaction: Option<Compaction>,
     /// Kinetic energy ½ vᵀ M v (N·mm/mm); 0 in a quasi-static analysis.
     pub kinetic_energy: f64,
+    /// Particles re-meshed during this step (a retry after an inverted element) and after it
+    /// (quality limits crossed); the state written for the step is the re-meshed one.
+    pub remeshes: usize,
 }
 
 /// Compaction quantities of a step (walls that do not exist report 0).
@@ -106,6 +109,8 @@ pub struct RunSummary {
     pub steps: usize,
     pub newton_iterations: usize,
     pub cutbacks: usize,
+    /// Particle re-meshes over the run.
+    pub remeshes: usize,
     pub final_time: f64,
     pub wall_time_s: f64,
     pub linear_solver: String,
@@ -130,6 +135,13 @@ pub struct Timing {
     pub contact_assembly: f64,
     /// Numeric factorisations and solves (symbolic analyses included).
     pub linear_solve: f64,
+    /// Re-meshing: the new meshes, the transfer of the state and the rebuilt solver (the
+    /// re-equilibration that follows is counted in the phases above, and in
+    /// `reequilibration`).
+    pub remesh: f64,
+    /// The re-equilibrations after re-meshes (already counted in the assembly and solve
+    /// phases).
+    pub reequilibration: f64,
 }
 
 /// The converged solution at the end of the last committed step.
@@ -211,6 +223,11 @@ pub struct Simulation {
     last_wall_force: Vec<f64>,
     f_elem_norm: f64,
     pub timing: Timing,
+    /// Particle re-meshes so far.
+    total_remeshes: usize,
+    /// Per body: the quality of its last new mesh when that mesh itself crossed the limits
+    /// (it is then re-meshed again only once it has become clearly worse).
+    remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,
 }
 
 impl Simulation {
@@ -346,7 +363,10 @@ impl Simulation {
             last_wall_force: vec![0.0; n_walls],
             f_elem_norm: 0.0,
             timing: Timing::default(),
+            total_remeshes: 0,
+            remesh_baseline: Vec::new(),
         };
+        sim.remesh_baseline = vec![None; sim.model.bodies.len()];
         sim.start_dynamics()?;
         Ok(sim)
     }
@@ -445,8 +465,156 @@ impl Simulation {
         next.area0_total = self.area0_total;
         next.force_floor = self.force_floor;
         next.timing = self.timing.clone();
+        next.total_remeshes = self.total_remeshes;
+        next.remesh_baseline.clone_from(&self.remesh_baseline);
         *self = next;
         Ok(moved)
+    }
+
+    /// After a converged step (`[remesh] enabled`): re-mesh every particle whose mesh, in the
+    /// current configuration, crosses the quality limits, then re-equilibrate. Particles held
+    /// by boundary conditions, loads or output groups are never re-meshed. Returns the number
+    /// of particles re-meshed.
+    fn remesh_after_step(&mut self) -> usize {
+        if !self.model.remesh.enabled {
+            return 0;
+        }
+        let limits = self.model.remesh.limits;
+        let x = self.coords(&self.sol.u);
+        let mut todo = Vec::new();
+        for (b, body) in self.model.bodies.iter().enumerate() {
+            if self.model.remesh_constraint(b).is_some() {
+                continue;
+            }
+            let xb = &x[body.node_offset..body.node_offset + body.mesh.n_nodes()];
+            match crate::remesh::check_quality(&body.mesh, xb, &limits) {
+                Ok(q) if q.needs_remesh => {
+                    let worse = match &self.remesh_baseline[b] {
+                        None => true,
+                        Some(base) => {
+                            q.scaled_jacobian.value < 0.9 * base.scaled_jacobian.value
+                                || q.aspect_ratio.value > 1.1 * base.aspect_ratio.value
+                                || q.min_angle_deg.value < 0.9 * base.min_angle_deg.value
+                        }
+                    };
+                    if worse {
+                        tracing::debug!(body = b, violated = ?q.violated, scaled_jacobian = q.scaled_jacobian.value, aspect_ratio = q.aspect_ratio.value, min_angle = q.min_angle_deg.value, "quality limits crossed");
+                        todo.push(b);
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => tracing::warn!(body = b, %e, "quality check failed"),
+            }
+        }
+        self.remesh_bodies(&todo)
+    }
+
+    /// Whether body `b`'s mesh in the last converged state is within a factor 2 of the quality
+    /// limits (scaled Jacobian below twice its limit, aspect ratio above half its limit or
+    /// smallest angle below twice its limit): only then is an inverted element answered by a
+    /// re-mesh rather than a cut-back.
+    fn mesh_is_poor(&self, b: usize) -> bool {
+        let body = &self.model.bodies[b];
+        let x = self.coords(&self.sol.u);
+        let xb = &x[body.node_offset..body.node_offset + body.mesh.n_nodes()];
+        let l = self.model.remesh.limits;
+        let relaxed = crate::remesh::QualityLimits {
+            min_scaled_jacobian: (2.0 * l.min_scaled_jacobian).min(0.99),
+            max_aspect_ratio: (0.5 * l.max_aspect_ratio).max(1.01),
+            min_angle_deg: (2.0 * l.min_angle_deg).min(89.0),
+        };
+        crate::remesh::check_quality(&body.mesh, xb, &relaxed).is_ok_and(|q| q.needs_remesh)
+    }
+
+    /// Re-mesh the bodies `bodies` in the current state (each at `[remesh] mesh_size` or its
+    /// own mesh size), then re-equilibrate the transferred state at the same time and wall
+    /// positions. A body whose re-mesh fails keeps its mesh (a warning says why); a failed
+    /// re-equilibration leaves the transferred state for the next step to balance. Returns the
+    /// number of bodies re-meshed.
+    fn remesh_bodies(&mut self, bodies: &[usize]) -> usize {
+        let started = Instant::now();
+        let mut done = 0;
+        for &b in bodies {
+            if self.total_remeshes >= self.model.remesh.max_remeshes {
+                tracing::warn!(max = self.model.remesh.max_remeshes, "the largest number of re-meshes (remesh.max_remeshes) is reached: no more re-meshing");
+                break;
+            }
+            let h = self.model.remesh.mesh_size.unwrap_or(self.model.bodies[b].mesh_size);
+            let t0 = Instant::now();
+            match self.remesh_body(b, h) {
+                Ok(moved) => {
+                    done += 1;
+                    self.total_remeshes += 1;
+                    let body = &self.model.bodies[b];
+                    let q = crate::remesh::check_quality(&body.mesh, &body.mesh.nodes, &self.model.remesh.limits).ok();
+                    self.remesh_baseline[b] = q.clone().filter(|q| q.needs_remesh);
+                    if let Some(q) = q.filter(|q| q.needs_remesh) {
+                        tracing::warn!(body = b, violated = ?q.violated, "the new mesh itself crosses the quality limits (boundary points are kept); re-meshed again only once it is worse");
+                    }
+                    tracing::info!(
+                        time = self.sol.time,
+                        body = b,
+                        name = %body.name,
+                        elements = body.mesh.n_elements(),
+                        area_change = moved.area.relative_change,
+                        "particle re-meshed"
+                    );
+                }
+                Err(e) => tracing::warn!(body = b, %e, "re-meshing failed: the particle keeps its mesh"),
+            }
+            // (the rebuild's set-up is not counted in any other phase)
+            self.timing.remesh += t0.elapsed().as_secs_f64();
+        }
+        if done > 0 {
+            let t0 = Instant::now();
+            match self.equilibrate() {
+                Ok(its) => tracing::debug!(iterations = its, "re-equilibrated after re-meshing"),
+                Err(e) => tracing::warn!(%e, "re-equilibration after re-meshing failed: the next step starts from the transferred state"),
+            }
+            self.timing.reequilibration += t0.elapsed().as_secs_f64();
+        }
+        tracing::debug!(done, seconds = started.elapsed().as_secs_f64(), "re-meshing");
+        done
+    }
+
+    /// Bring the state back into equilibrium at the current time and wall positions (after a
+    /// re-mesh: the transferred stresses are not exactly balanced on the new mesh). A Newton
+    /// solve with Δt = 0 (no creep, the springs anchored where they are), committed in place:
+    /// time, step counter and the last increment (for the next prediction) are kept. Returns
+    /// the Newton iterations.
+    pub fn equilibrate(&mut self) -> Result<usize, NewtonFailure> {
+        if self.dynamics.is_some() {
+            return Err(NewtonFailure::Linear("re-equilibration is for quasi-static analyses".into()));
+        }
+        let inc = TimeIncrement { time: self.sol.time, dt: 0.0 };
+        let snapshot = self.contact.as_ref().map(|c| c.snapshot());
+        let (stab_all, stab_viscous) = (self.stab_all, self.stab_viscous);
+        self.stab_viscous = true;
+        let result = self.prepare_contact(0.0).and_then(|()| self.solve_from(self.sol.u.clone(), inc, false));
+        self.stab_all = stab_all;
+        self.stab_viscous = stab_viscous;
+        let trial = match result {
+            Ok(t) => t,
+            Err(e) => {
+                if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot) {
+                    c.restore(snap);
+                }
+                return Err(e);
+            }
+        };
+        let stab: f64 = self.stab_k.iter().enumerate().map(|(d, k)| k * (trial.u[d] - self.stab_anchor[d]) * (trial.u[d] - self.sol.u[d])).sum();
+        self.stab_energy += stab;
+        if let Some(c) = self.contact.as_mut() {
+            c.commit();
+        }
+        for d in 0..self.u_prev.len() {
+            self.u_prev[d] += trial.u[d] - self.sol.u[d];
+        }
+        self.sol.u = trial.u;
+        self.sol.lambda = trial.lambda;
+        std::mem::swap(&mut self.sol.fields, &mut self.trial_fields);
+        self.total_iterations += trial.iterations;
+        Ok(trial.iterations)
     }
 
     pub fn linear_solver_name(&self) -> &str {
@@ -527,6 +695,7 @@ impl Simulation {
             steps: self.step,
             newton_iterations: self.total_iterations,
             cutbacks: self.total_cutbacks,
+            remeshes: self.total_remeshes,
             final_time: self.sol.time,
             wall_time_s: start.elapsed().as_secs_f64(),
             linear_solver: self.linear_name.clone(),
@@ -556,7 +725,11 @@ impl Simulation {
     pub fn advance(&mut self, dt: f64) -> Result<StepReport, SolveError> {
         let mut dt_try = dt;
         let mut cutbacks = 0;
-        let snapshot = self.contact.as_ref().map(|c| c.snapshot());
+        let mut snapshot = self.contact.as_ref().map(|c| c.snapshot());
+        // particles re-meshed in this step: the retry after an inverted element (once per
+        // step), then those whose mesh crosses the quality limits after the step
+        let mut remeshes = 0;
+        let mut remesh_tried = false;
         loop {
             if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
                 c.restore(snap.clone());
@@ -565,11 +738,33 @@ impl Simulation {
             let stabilised = self.contact.is_some() && self.model.contact.stabilisation > 0.0;
             let partial = stabilised && !self.stab_all && self.model.contact.stabilise == Stabilise::Unsupported;
             let inertial = stabilised && !self.stab_viscous && self.model.contact.viscous_retry && self.model.contact.stabilisation_kind == StabilisationKind::Inertial;
+            let inverted = match &result {
+                Err(NewtonFailure::Element(e)) if self.model.remesh.enabled && !remesh_tried => self.model.elem_body.get(e.element).copied(),
+                _ => None,
+            };
+            if let Some(b) = inverted {
+                // an element inverted: re-mesh its particle (in the last converged state) and
+                // retry the same step before any cut-back, when its mesh there is already
+                // poor (a new mesh of a good mesh does not help: the step was too large)
+                remesh_tried = true;
+                if self.model.remesh_constraint(b).is_none() && self.mesh_is_poor(b) {
+                    tracing::info!(time = self.sol.time, dt = dt_try, body = b, "an element inverted: re-meshing the particle and retrying the step");
+                    let n = self.remesh_bodies(&[b]);
+                    if n > 0 {
+                        remeshes += n;
+                        snapshot = self.contact.as_ref().map(|c| c.snapshot());
+                        continue;
+                    }
+                }
+            }
             match result {
                 Ok(trial) => {
                     self.stab_all = false;
                     self.stab_viscous = false;
-                    return Ok(self.commit(dt_try, trial, cutbacks));
+                    let mut report = self.commit(dt_try, trial, cutbacks);
+                    remeshes += self.remesh_after_step();
+                    report.remeshes = remeshes;
+                    return Ok(report);
                 }
                 Err(cause) if partial => {
                     // retry the same step with every dof stabilised before cutting back
@@ -748,11 +943,11 @@ impl Simulation {
         r
     }
 
-    /// Attempt one step of size dt from the committed solution. On success the trial
-    /// displacement is in `self.sol.u` (not yet committed) — see `commit`.
-    fn try_step(&mut self, dt: f64) -> Result<Trial, NewtonFailure> {
-        let t = self.sol.time + dt;
-        let inc = TimeIncrement { time: t, dt };
+    /// Contact pairs for a solve that ends at `sol.time + dt` (frozen during its Newton
+    /// iterations; the pattern is rebuilt when they change), where the stabilisation springs
+    /// are anchored and how stiff they are. `dt = 0` is a re-equilibration in place: the springs
+    /// are then anchored at the last converged position.
+    fn prepare_contact(&mut self, dt: f64) -> Result<(), NewtonFailure> {
         // contact pairs for this step, frozen during its Newton iterations
         let t_search = Instant::now();
         if let Some(c) = self.contact.as_mut() {
@@ -787,6 +982,15 @@ impl Simulation {
             }
         }
         self.timing.contact_search += t_search.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Attempt one step of size dt from the committed solution. On success the trial
+    /// displacement is in `self.sol.u` (not yet committed) — see `commit`.
+    fn try_step(&mut self, dt: f64) -> Result<Trial, NewtonFailure> {
+        let t = self.sol.time + dt;
+        let inc = TimeIncrement { time: t, dt };
+        self.prepare_contact(dt)?;
         // prediction
         let mut u = self.sol.u.clone();
         if self.dt_prev > 0.0 {
@@ -813,6 +1017,16 @@ impl Simulation {
                 }
             }
         }
+        let restart = self.dt_prev > 0.0;
+        self.solve_from(u, inc, restart)
+    }
+
+    /// Newton from `u` (prescribed dofs already at their values of `inc.time`), with the
+    /// augmented-Lagrangian updates of the incompressible bodies and of the contact. With
+    /// `restart`, a first guess that inverts an element is replaced once by the last converged
+    /// solution.
+    fn solve_from(&mut self, mut u: Vec<f64>, inc: TimeIncrement, restart: bool) -> Result<Trial, NewtonFailure> {
+        let t = inc.time;
         let mut lambda = self.sol.lambda.clone();
         let mut iterations = 0;
         let mut updates = 0;
@@ -821,7 +1035,7 @@ impl Simulation {
             let vol = self.volumetric(&lambda);
             let (its, res) = match self.newton(&mut u, inc, &vol) {
                 Ok(v) => v,
-                Err(NewtonFailure::Element(e)) if first && self.dt_prev > 0.0 => {
+                Err(NewtonFailure::Element(e)) if first && restart => {
                     // the extrapolated guess inverted an element: restart from the last solution
                     tracing::debug!(%e, "prediction rejected");
                     first = false;
@@ -1091,6 +1305,7 @@ impl Simulation {
             reactions,
             displacements,
             kinetic_energy: self.dynamics.as_ref().map_or(0.0, |dy| dy.kinetic_energy()),
+            remeshes: 0,
         }
     }
 }

@@ -755,3 +755,34 @@ fn grid_material_mixtures() {
     assert_eq!(e.key, "grids[0].materials[1]");
     assert_has(&e, &["no material named \"tin\""]);
 }
+
+/// `[remesh]`: off without the table, on with it (defaults 0.2 / 10 / 15°, each body's own
+/// size); a value out of range names its key, the value and the range; re-meshing is refused
+/// with implicit dynamics, whose velocities it would not carry.
+#[test]
+fn remesh_table_defaults_ranges_and_dynamics() {
+    let off = parse(BASE).unwrap().remesh;
+    assert!(!off.enabled);
+    let on = parse(&format!("{BASE}\n[remesh]\n")).unwrap().remesh;
+    assert!(on.enabled && on.mesh_size.is_none());
+    assert_eq!((on.limits.min_scaled_jacobian, on.limits.max_aspect_ratio, on.limits.min_angle_deg), (0.2, 10.0, 15.0));
+    let set = parse(&format!("{BASE}\n[remesh]\nmin_scaled_jacobian = 0.3\nmax_aspect_ratio = 6.0\nmin_angle = 20.0\nmesh_size = 2.5\nmax_remeshes = 7\n")).unwrap().remesh;
+    assert_eq!((set.limits.min_scaled_jacobian, set.limits.max_aspect_ratio, set.limits.min_angle_deg, set.mesh_size, set.max_remeshes), (0.3, 6.0, 20.0, Some(2.5), 7));
+    for (key, value, expected) in [
+        ("min_scaled_jacobian", "1.5", "in (0, 1)"),
+        ("max_aspect_ratio", "0.5", "> 1"),
+        ("min_angle", "95.0", "(0, 90)"),
+        ("mesh_size", "-1.0", "> 0"),
+        ("max_remeshes", "-3", ">= 0"),
+    ] {
+        let e = err_of(&format!("{BASE}\n[remesh]\n{key} = {value}\n"));
+        assert_eq!(e.key, format!("remesh.{key}"));
+        assert_has(&e, &[&format!("value {value}"), expected]);
+    }
+    let dynamic = BASE.replace("[time]", "[time]\nintegrator = \"newmark\"").replace("poisson_ratio = 0.3\n", "poisson_ratio = 0.3\ndensity = 2.7e-9\n");
+    assert!(dynamic.contains("density"));
+    assert!(dynamic.contains("integrator"));
+    let e = err_of(&format!("{dynamic}\n[remesh]\n"));
+    assert_eq!(e.key, "remesh.enabled");
+    assert_has(&e, &["value true", "time.integrator"]);
+}

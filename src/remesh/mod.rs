@@ -30,14 +30,21 @@
 //!    reproduced exactly at such points (error ≤ |∇f| × distance). [`TransferStats`] reports how
 //!    many points were outside and how far.
 //!
-//! ## Plan for the integration into the solver (not done here)
+//! ## Integration into the solver
 //! [`body::transfer_body`] does items 3, 5 and 6 below for one particle (material states, j₀,
 //! λ_e), tested exact for a homogeneous history, and
 //! [`crate::solver::Simulation::remesh_body`] re-meshes a body of a running simulation with it
-//! (tested mid-run: wall forces within 1 %). What is left: the trigger (nothing calls
-//! `remesh_body` during a run yet), re-equilibration before the next step (that step takes
-//! 24 Newton iterations instead of 5), contact history and the `remeshes` history column.
+//! (tested mid-run: wall forces within 1 %). With `[remesh]` in the case
+//! ([`crate::case::RemeshSpec`]) the solver calls it after every converged step for each free
+//! particle that crosses the quality limits, and once per step for the particle of an inverted
+//! element when its mesh is already near the limits; then
+//! [`crate::solver::Simulation::equilibrate`] balances the transferred state in place
+//! (Δt = 0: 6 Newton iterations in the mid-run test). The history's `remeshes` column counts
+//! them; results.h5 writes each step's own mesh. Still missing: contact history (stick points,
+//! multipliers) and a boundary resampling that does not add the midpoints of the kept boundary
+//! edges at every re-mesh (see the closing notes of the re-meshing issue).
 //!
+//! The list of what a re-mesh carries over, item by item:
 //! At a re-mesh of body b at the end of a committed step (the solver is not modified by this
 //! module; this is the list of what it has to carry over):
 //! 1. **Trigger**: [`monitor::check_quality`] on the body's mesh with the current coordinates
