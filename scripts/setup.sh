@@ -4,6 +4,7 @@
 set -euo pipefail
 
 need=()
+# C compiler: also builds METIS from the sources bundled with the metis-sys crate (partition/)
 command -v cc >/dev/null 2>&1 || need+=(gcc libc6-dev)
 command -v pkg-config >/dev/null 2>&1 || need+=(pkg-config)
 command -v make >/dev/null 2>&1 || need+=(make)

@@ -119,3 +119,131 @@ impl Fixture {
         (&self.kk, b)
     }
 }
+
+/// The stiffness-like matrix of an `n × n` grid of elastic discs (E = 64 100 MPa, ν = 0.3) at a
+/// solid ratio of 0.78 (neighbours almost touch) in a 100 mm die, meshed at `mesh_size`, with
+/// every degree of freedom free:
+/// the element tangent at u = 0, plus "contact" springs (stiffness 0.1 × the mean diagonal,
+/// the pattern of a penalty contact tangent) joining every boundary node to the boundary nodes
+/// of other discs within 0.15 × the disc pitch (contact zones of a compacted packing), plus
+/// 1e-3 × the mean diagonal on the diagonal (a mass term; removes the rigid-body modes), so the
+/// matrix is symmetric positive definite.
+pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
+    let text = format!(
+        r#"title = "benchmark disc grid"
+[[materials]]
+name = "m"
+model = "elastic"
+youngs_modulus = 64100.0
+poisson_ratio = 0.3
+[[grids]]
+material = "m"
+nx = {n}
+ny = {n}
+shape = "disc"
+solid_ratio = 0.78
+mesh_size = {mesh_size}
+[time]
+end = 1.0
+dt = 0.1
+[[walls]]
+side = "left"
+position = 0.0
+velocity = 10.0
+[[walls]]
+side = "right"
+position = 100.0
+velocity = 10.0
+[[walls]]
+side = "bottom"
+position = 0.0
+velocity = 10.0
+[[walls]]
+side = "top"
+position = 100.0
+velocity = 10.0
+"#
+    );
+    let case = crate::case::parse(&text, std::path::Path::new(".")).expect("benchmark case");
+    let model = Model::from_case(&case).expect("benchmark model");
+    let (eq, n_free) = number_equations(model.n_dofs(), std::iter::empty());
+    let (mut assembler, mut kk) = Assembler::new(&model, eq, n_free);
+    let ne = model.elements.len();
+    let material = &model.materials[0];
+    let kappa = material.bulk_modulus().unwrap_or(1e3 * material.shear_modulus());
+    let mut f_int = vec![0.0; model.n_dofs()];
+    assembler
+        .assemble(
+            &model,
+            &vec![0.0; model.n_dofs()],
+            &vec![[MatState::default(); 4]; ne],
+            &vec![[0.0; crate::element::N_ENH]; ne],
+            &vec![Volumetric { kappa, lambda: 0.0 }; ne],
+            TimeIncrement { time: 1.0, dt: 1.0 },
+            Some(&mut kk),
+            &mut f_int,
+            &mut ElementFields::new(ne),
+            None,
+        )
+        .expect("assembly");
+    // Boundary nodes of every body (global numbers) and the node pairs within reach.
+    let boundary: Vec<Vec<usize>> = model
+        .bodies
+        .iter()
+        .map(|b| {
+            let mut v: Vec<usize> = b.mesh.boundary.iter().flatten().map(|&l| l + b.node_offset).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        })
+        .collect();
+    let reach = 0.15 * 100.0 / n as f64;
+    let mut pairs = Vec::new();
+    for (a, ba) in boundary.iter().enumerate() {
+        for bb in &boundary[a + 1..] {
+            for &i in ba {
+                for &j in bb {
+                    let (p, q) = (model.x0[i], model.x0[j]);
+                    if (p[0] - q[0]).hypot(p[1] - q[1]) <= reach {
+                        pairs.push((i, j));
+                    }
+                }
+            }
+        }
+    }
+    let nd = kk.nrows;
+    let mut rows: Vec<Vec<usize>> = (0..nd).map(|r| kk.col_idx[kk.row_ptr[r]..kk.row_ptr[r + 1]].to_vec()).collect();
+    for &(i, j) in &pairs {
+        for c in 0..2 {
+            rows[2 * i + c].push(2 * j + c);
+            rows[2 * j + c].push(2 * i + c);
+        }
+    }
+    for r in rows.iter_mut() {
+        r.sort_unstable();
+        r.dedup();
+    }
+    let mut a = CsrMatrix::from_rows(nd, &rows);
+    for r in 0..nd {
+        for k in kk.row_ptr[r]..kk.row_ptr[r + 1] {
+            let p = a.find(r, kk.col_idx[k]).expect("same pattern");
+            a.values[p] += kk.values[k];
+        }
+    }
+    let mean_diag = kk.diagonal().iter().sum::<f64>() / nd as f64;
+    let spring = 0.1 * mean_diag;
+    for &(i, j) in &pairs {
+        for c in 0..2 {
+            let (u, v) = (2 * i + c, 2 * j + c);
+            for (r, s, val) in [(u, u, spring), (v, v, spring), (u, v, -spring), (v, u, -spring)] {
+                let p = a.find(r, s).expect("spring entry");
+                a.values[p] += val;
+            }
+        }
+    }
+    for r in 0..nd {
+        let p = a.find(r, r).expect("diagonal");
+        a.values[p] += 1e-3 * mean_diag;
+    }
+    a
+}

@@ -1,18 +1,35 @@
-//! Graph partitioning for mpfem.
+//! Graph partitioning and fill-reducing orderings for mpfem.
 //!
 //! A partitioner is a plain function, [`Partitioner`]: it takes a [`Graph`] (CSR adjacency in
 //! the METIS layout: `xadj`, `adjncy`, vertex weights `vwgt`) and a number of parts, and returns
-//! the part index (`0..nparts`) of every vertex.
+//! the part index (`0..nparts`) of every vertex. Two are offered:
 //!
-//! This crate currently ships only the **serial stand-in** [`greedy_bfs`]: parts are grown one
-//! after the other by breadth-first search from a pseudo-peripheral seed until each holds its
-//! share of the total vertex weight. It is simple, deterministic and dependency-free, gives
-//! perfectly balanced parts for unit weights on connected graphs, and gives reasonable (not
-//! minimal) edge cuts on mesh-like graphs. METIS (multilevel k-way) will be added later as
-//! another function of the same [`Partitioner`] type, so callers never change.
+//! - [`metis_kway`] (and [`try_metis_kway`], which returns errors instead of falling back):
+//!   METIS 5 multilevel k-way, minimal edge cut with the vertex weights balanced to METIS's 3 %
+//!   tolerance, contiguous parts on connected graphs. METIS is built from the C sources bundled
+//!   with the `metis-sys` crate (a C compiler is all it needs).
+//! - [`greedy_bfs`], the dependency-light serial stand-in: parts are grown one after the other
+//!   by breadth-first search from a pseudo-peripheral seed until each holds its share of the
+//!   total vertex weight. It is simple and deterministic, gives perfectly balanced parts for
+//!   unit weights on connected graphs, and reasonable (not minimal) edge cuts on mesh-like
+//!   graphs.
 //!
 //! Quality measures: [`edge_cut`] (number of edges between different parts) and [`imbalance`]
 //! (heaviest part weight over the average part weight; 1.0 is perfect balance).
+//!
+//! The particle graph of a multi-particle model (vertex weight = element count, edges = contacts
+//! or proximity of bounding boxes) is built from plain data by [`particle_graph`].
+//!
+//! Orderings: [`metis_nd`] is METIS's nested-dissection fill-reducing ordering of a graph;
+//! [`graph_of_pattern`] turns a sparse matrix pattern into the graph it needs.
+
+mod metis_wrap;
+mod particles;
+
+pub use crate::metis_wrap::{
+    graph_of_pattern, is_connected, metis_kway, metis_nd, try_metis_kway, validate, PartitionError,
+};
+pub use crate::particles::{particle_graph, Adjacency, Particle};
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, VecDeque};
@@ -385,5 +402,275 @@ mod tests {
         let parts = f(&g, 2);
         check_valid(&g, &parts, 2);
         assert_eq!(edge_cut(&g, &parts), edge_cut(&g, &greedy_bfs(&g, 2)));
+    }
+
+    /// Every part index in `0..nparts` is used.
+    fn all_parts_used(parts: &[usize], nparts: usize) -> bool {
+        let mut used = vec![false; nparts];
+        parts.iter().for_each(|&p| used[p] = true);
+        used.iter().all(|&u| u)
+    }
+
+    /// Every part induces a connected subgraph.
+    fn parts_contiguous(g: &Graph, parts: &[usize], nparts: usize) -> bool {
+        (0..nparts).all(|p| {
+            let members: Vec<usize> = (0..g.n_vertices()).filter(|&v| parts[v] == p).collect();
+            let Some(&s) = members.first() else {
+                return true;
+            };
+            let mut seen = vec![false; g.n_vertices()];
+            let mut stack = vec![s];
+            seen[s] = true;
+            let mut count = 1;
+            while let Some(v) = stack.pop() {
+                for &w in g.neighbors(v) {
+                    if parts[w] == p && !seen[w] {
+                        seen[w] = true;
+                        count += 1;
+                        stack.push(w);
+                    }
+                }
+            }
+            count == members.len()
+        })
+    }
+
+    #[test]
+    fn metis_kway_grid_32x32() {
+        // 1024 unit-weight vertices into 2, 3, 4, 8 parts. Required: every part non-empty and
+        // contiguous, imbalance <= 1.05 (the distributed-runs issue's 5 %), and an edge cut of
+        // at most 1.2 × greedy_bfs's. The regular grid is METIS's weak spot and greedy_bfs's
+        // strong one: the gain-ordered BFS finds (nearly) straight cuts — 64 = the optimum for
+        // 4 parts — while METIS's coarsening meets ties everywhere and its refinement leaves
+        // jagged boundaries (one try: 81 for 4 parts; best of 8 tries, as used: 73 = 1.14×).
+        // On irregular graphs METIS is the better partitioner; the 1.2× bound only says it is
+        // not much worse where the stand-in is at its best. Lower bounds: a bisection of a
+        // 32 × 32 grid cuts at least 32 edges, a 4-way partition at least 64.
+        let g = grid(32, 32);
+        for (nparts, lower) in [(2usize, 32usize), (3, 32), (4, 64), (8, 64)] {
+            let parts = try_metis_kway(&g, nparts).expect("METIS k-way");
+            check_valid(&g, &parts, nparts);
+            assert!(
+                all_parts_used(&parts, nparts),
+                "nparts {nparts}: an empty part"
+            );
+            assert!(
+                parts_contiguous(&g, &parts, nparts),
+                "nparts {nparts}: a part is not contiguous"
+            );
+            let imb = imbalance(&g, &parts, nparts);
+            assert!(imb <= 1.05, "nparts {nparts}: imbalance {imb}");
+            let cut = edge_cut(&g, &parts);
+            let greedy = edge_cut(&g, &greedy_bfs(&g, nparts));
+            eprintln!("grid nparts {nparts}: imbalance {imb:.4}, cut {cut}, greedy cut {greedy}");
+            assert!(
+                cut >= lower,
+                "nparts {nparts}: cut {cut} below the bound {lower}?"
+            );
+            assert!(
+                5 * cut <= 6 * greedy,
+                "nparts {nparts}: METIS cut {cut} > 1.2 × greedy_bfs cut {greedy}"
+            );
+            // Deterministic: the same answer twice.
+            assert_eq!(metis_kway(&g, nparts), parts);
+        }
+    }
+
+    /// `n × n` particles of unit size on a grid of pitch 1.05 (gap 0.05 between neighbours),
+    /// with element counts between 40 and 199.
+    fn particle_grid(n: usize) -> Vec<Particle> {
+        (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k % n) as f64, (k / n) as f64);
+                Particle {
+                    elements: 40 + (k as u64 * 37) % 160,
+                    min: [1.05 * i, 1.05 * j],
+                    max: [1.05 * i + 1.0, 1.05 * j + 1.0],
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn particle_graph_edges() {
+        let ps = particle_grid(8);
+        // Gap 0.06: the 4 side neighbours (0.05 apart), not the diagonal ones (0.0707 apart).
+        let g = particle_graph(&ps, Adjacency::Proximity { gap: 0.06 }).unwrap();
+        validate(&g).unwrap();
+        assert_eq!(g.n_edges(), 2 * 8 * 7);
+        assert_eq!(g.vwgt, ps.iter().map(|p| p.elements).collect::<Vec<_>>());
+        // Gap 0.08: the diagonal neighbours too, 2 × 7 × 7 more edges.
+        let g = particle_graph(&ps, Adjacency::Proximity { gap: 0.08 }).unwrap();
+        assert_eq!(g.n_edges(), 2 * 8 * 7 + 2 * 7 * 7);
+        // Gap 0.04: nothing is that close.
+        assert_eq!(
+            particle_graph(&ps, Adjacency::Proximity { gap: 0.04 })
+                .unwrap()
+                .n_edges(),
+            0
+        );
+        // Contacts as given (repeats and self pairs dropped).
+        let g =
+            particle_graph(&ps, Adjacency::Contacts(&[(0, 1), (1, 0), (2, 2), (5, 9)])).unwrap();
+        assert_eq!(g.n_edges(), 2);
+        assert_eq!(g.neighbors(9), &[5]);
+        // Bad input is an error, not a panic.
+        assert!(particle_graph(&ps, Adjacency::Contacts(&[(0, 64)])).is_err());
+        assert!(particle_graph(&ps, Adjacency::Proximity { gap: -1.0 }).is_err());
+        assert!(particle_graph(&ps, Adjacency::Proximity { gap: f64::NAN }).is_err());
+        let mut bad = ps.clone();
+        bad[3].max[0] = bad[3].min[0] - 1.0;
+        assert!(particle_graph(&bad, Adjacency::Proximity { gap: 0.1 }).is_err());
+        assert_eq!(
+            particle_graph(&[], Adjacency::Proximity { gap: 0.1 })
+                .unwrap()
+                .n_vertices(),
+            0
+        );
+    }
+
+    #[test]
+    fn metis_balances_particle_element_counts() {
+        // 8 × 8 particles with 40..199 elements each (7 800 in all): the element counts of the
+        // parts are balanced to 5 % for 2 and 4 parts, with contiguous parts.
+        let ps = particle_grid(8);
+        let g = particle_graph(&ps, Adjacency::Proximity { gap: 0.06 }).unwrap();
+        for nparts in [2, 4] {
+            let parts = try_metis_kway(&g, nparts).unwrap();
+            check_valid(&g, &parts, nparts);
+            assert!(all_parts_used(&parts, nparts));
+            assert!(parts_contiguous(&g, &parts, nparts));
+            let imb = imbalance(&g, &parts, nparts);
+            eprintln!(
+                "particles nparts {nparts}: imbalance {imb:.4}, cut {}",
+                edge_cut(&g, &parts)
+            );
+            assert!(
+                imb <= 1.05,
+                "nparts {nparts}: element-count imbalance {imb}"
+            );
+            // A straight cut of the 8 × 8 grid crosses 8 edges (16 for 4 quadrants); the
+            // weights force steps, allow twice that.
+            let cut = edge_cut(&g, &parts);
+            assert!(cut <= 16 * (nparts - 1), "nparts {nparts}: cut {cut}");
+        }
+    }
+
+    #[test]
+    fn metis_kway_edge_cases() {
+        let g = grid(3, 2);
+        assert_eq!(try_metis_kway(&g, 1).unwrap(), vec![0; 6]);
+        assert_eq!(try_metis_kway(&g, 6).unwrap(), (0..6).collect::<Vec<_>>());
+        assert_eq!(try_metis_kway(&g, 10).unwrap(), (0..6).collect::<Vec<_>>());
+        assert_eq!(metis_kway(&g, 10), (0..6).collect::<Vec<_>>());
+        assert_eq!(try_metis_kway(&g, 0), Err(PartitionError::NoParts));
+        let empty = Graph::from_edges(0, &[]);
+        assert_eq!(try_metis_kway(&empty, 3).unwrap(), Vec::<usize>::new());
+        assert_eq!(metis_kway(&empty, 1), Vec::<usize>::new());
+        // No edges at all, all weights zero: balanced by count.
+        let g = Graph::from_edges_weighted(vec![0; 10], &[]);
+        let parts = try_metis_kway(&g, 2).unwrap();
+        check_valid(&g, &parts, 2);
+        // Disconnected graph (no contiguity requested): two paths of 10, weight 2 each.
+        let mut edges: Vec<(usize, usize)> = (0..9).map(|i| (i, i + 1)).collect();
+        edges.extend((10..19).map(|i| (i, i + 1)));
+        let g = Graph::from_edges_weighted(vec![2; 20], &edges);
+        assert!(!is_connected(&g));
+        let parts = try_metis_kway(&g, 2).unwrap();
+        assert_eq!(imbalance(&g, &parts, 2), 1.0);
+        assert_eq!(edge_cut(&g, &parts), 0);
+        // Malformed graphs are errors, never panics (and METIS never sees them).
+        let good = grid(3, 3);
+        let mut bad = good.clone();
+        bad.adjncy[0] = 9; // out of range
+        assert!(matches!(
+            try_metis_kway(&bad, 2),
+            Err(PartitionError::InvalidGraph(_))
+        ));
+        let mut bad = good.clone();
+        bad.adjncy[0] = 0; // self loop
+        assert!(matches!(
+            try_metis_kway(&bad, 2),
+            Err(PartitionError::InvalidGraph(_))
+        ));
+        // One direction only: 0 → 1 and 1 → 0 replaced by 0 → 4 (4 does not list 0).
+        let mut bad = good.clone();
+        let k = bad.adjncy.iter().position(|&w| w == 1).unwrap();
+        bad.adjncy[k] = 4;
+        assert!(matches!(
+            try_metis_kway(&bad, 2),
+            Err(PartitionError::InvalidGraph(_))
+        ));
+        let mut bad = good.clone();
+        bad.xadj.pop();
+        assert!(matches!(
+            try_metis_kway(&bad, 2),
+            Err(PartitionError::InvalidGraph(_))
+        ));
+        assert!(metis_nd(&bad).is_err());
+        let mut bad = good.clone();
+        bad.vwgt[0] = u64::MAX / 2;
+        assert!(matches!(
+            try_metis_kway(&bad, 2),
+            Err(PartitionError::TooLarge(_))
+        ));
+        // ... and metis_kway falls back to greedy_bfs there.
+        check_valid(&bad, &metis_kway(&bad, 2), 2);
+    }
+
+    fn is_permutation_pair(perm: &[usize], iperm: &[usize]) -> bool {
+        perm.len() == iperm.len()
+            && perm
+                .iter()
+                .enumerate()
+                .all(|(k, &v)| v < iperm.len() && iperm[v] == k)
+    }
+
+    #[test]
+    fn metis_nd_orders_graphs() {
+        let (p, ip) = metis_nd(&Graph::from_edges(0, &[])).unwrap();
+        assert!(p.is_empty() && ip.is_empty());
+        assert_eq!(
+            metis_nd(&Graph::from_edges(1, &[])).unwrap(),
+            (vec![0], vec![0])
+        );
+        let (p, ip) = metis_nd(&Graph::from_edges(5, &[])).unwrap();
+        assert!(is_permutation_pair(&p, &ip));
+        let g = grid(20, 20);
+        let (p, ip) = metis_nd(&g).unwrap();
+        assert!(is_permutation_pair(&p, &ip));
+        // Nested dissection numbers a separator last: the last 20 vertices eliminated split the
+        // grid (removing them leaves it disconnected).
+        let last: Vec<bool> = (0..400).map(|v| ip[v] >= 380).collect();
+        let rest: Vec<usize> = (0..400).filter(|&v| !last[v]).collect();
+        let mut seen = vec![false; 400];
+        let mut stack = vec![rest[0]];
+        seen[rest[0]] = true;
+        while let Some(v) = stack.pop() {
+            for &w in g.neighbors(v) {
+                if !last[w] && !seen[w] {
+                    seen[w] = true;
+                    stack.push(w);
+                }
+            }
+        }
+        assert!(
+            rest.iter().any(|&v| !seen[v]),
+            "the last 20 vertices are not a separator"
+        );
+        assert_eq!(metis_nd(&g).unwrap(), (p, ip), "deterministic");
+    }
+
+    #[test]
+    fn graph_of_a_matrix_pattern() {
+        // 3 × 3 pattern with a diagonal, an unsymmetric entry (0, 2) and a repeated (1, 0).
+        let row_ptr = [0, 2, 5, 6];
+        let col_idx = [0, 2, 0, 1, 0, 2];
+        let g = graph_of_pattern(3, &row_ptr, &col_idx).unwrap();
+        assert_eq!(g.xadj, vec![0, 2, 3, 4]);
+        assert_eq!(g.adjncy, vec![1, 2, 0, 0]);
+        validate(&g).unwrap();
+        assert!(graph_of_pattern(3, &row_ptr, &[0, 2, 0, 1, 0, 3]).is_err());
+        assert!(graph_of_pattern(2, &row_ptr, &col_idx).is_err());
     }
 }

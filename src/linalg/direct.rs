@@ -2,6 +2,11 @@
 //! ([`FaerCholesky`]: LLᵀ, falling back to a Bunch–Kaufman LBLᵀ or an LDLᵀ factorisation on the
 //! same symbolic structure when the matrix is not positive definite).
 //!
+//! The fill-reducing ordering of the Cholesky factorisation is a [`FillOrdering`]: faer's
+//! approximate minimum degree (AMD) or METIS nested dissection (from the `partition` crate). The
+//! LU factorisation always uses faer's COLAMD column ordering: faer 0.24's symbolic LU takes no
+//! custom column permutation.
+//!
 //! Both keep their symbolic factorisation (fill-reducing ordering, elimination tree, supernodes)
 //! and all numeric storage and scratch memory between calls: `factor` only refills values and
 //! runs the numeric factorisation, as long as the pattern is unchanged
@@ -54,6 +59,66 @@ impl FactorStructure {
             FactorStructure::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
         }
     }
+}
+
+/// Fill-reducing symmetric ordering of [`FaerCholesky`].
+///
+/// AMD is the default because it is the faster one here: on the SPD disc-grid tangents of
+/// `benches/ordering.rs` (27 000 and 109 000 unknowns, sequential) METIS nested dissection
+/// gives 6-13 % less fill, but its analysis + factorisation takes 2.9-4× as long (the METIS
+/// ordering itself dominates) and even the numeric factorisation alone, the work of every
+/// Newton iteration, takes 1.1-1.4× as long with faer's supernodal kernels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FillOrdering {
+    /// faer's approximate minimum degree ordering.
+    #[default]
+    Amd,
+    /// METIS nested dissection ([`partition::metis_nd`]) of the matrix graph (the pattern
+    /// without its diagonal). When METIS fails the analysis falls back to AMD with a warning.
+    Metis,
+}
+
+/// Owned fill-reducing permutation for faer: `fwd[k]` is the row eliminated `k`-th, `inv` its
+/// inverse. `None` means "let faer compute AMD".
+fn fill_permutation(a: &CsrMatrix, ordering: FillOrdering) -> Option<(Vec<usize>, Vec<usize>)> {
+    match ordering {
+        FillOrdering::Amd => None,
+        FillOrdering::Metis => {
+            let nd = partition::graph_of_pattern(a.nrows, &a.row_ptr, &a.col_idx).and_then(|g| partition::metis_nd(&g));
+            match nd {
+                Ok(p) => Some(p),
+                Err(e) => {
+                    tracing::warn!("METIS nested dissection failed ({e}); using AMD");
+                    None
+                }
+            }
+        }
+    }
+}
+
+/// Symbolic Cholesky of the lower triangle of `a` (its CSR upper triangle) with the given
+/// ordering.
+fn symbolic_cholesky(
+    a: &CsrMatrix,
+    ordering: FillOrdering,
+    structure: FactorStructure,
+) -> Result<SymbolicCholesky<usize>, LinalgError> {
+    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(), ..Default::default() };
+    let perm = fill_permutation(a, ordering);
+    let ord = match &perm {
+        Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, a.nrows)),
+        None => SymmetricOrdering::Amd,
+    };
+    factorize_symbolic_cholesky(csr_as_csc(a), Side::Lower, ord, params)
+        .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))
+}
+
+/// Number of nonzeros of the Cholesky factor L (diagonal included) of the symmetric matrix `a`
+/// under the given ordering: the fill measure of an ordering (a simplicial symbolic analysis,
+/// no numeric work).
+pub fn cholesky_factor_nnz(a: &CsrMatrix, ordering: FillOrdering) -> Result<usize, LinalgError> {
+    check_square(a)?;
+    Ok(symbolic_cholesky(a, ordering, FactorStructure::Simplicial)?.len_val())
 }
 
 /// Post-solve accuracy control of the direct solvers.
@@ -420,7 +485,8 @@ pub enum CholeskyKind {
     Lblt,
 }
 
-/// faer sparse Cholesky with an AMD fill-reducing ordering.
+/// faer sparse Cholesky with a choice of fill-reducing ordering ([`FillOrdering`], AMD by
+/// default).
 ///
 /// The CSR matrix must be symmetric with a structurally symmetric (full) pattern; only the
 /// entries `a[i][j]` with `j ≥ i` (the upper triangle of the CSR rows, which is the lower
@@ -433,6 +499,7 @@ pub struct FaerCholesky {
     threads: usize,
     par: Par,
     structure: FactorStructure,
+    ordering: FillOrdering,
     refine: Refinement,
     stamp: PatternStamp,
     analyses: usize,
@@ -456,6 +523,7 @@ impl FaerCholesky {
             threads,
             par: faer_par(threads),
             structure: FactorStructure::Auto,
+            ordering: FillOrdering::default(),
             refine: Refinement::default(),
             stamp: PatternStamp::default(),
             analyses: 0,
@@ -500,6 +568,24 @@ impl FaerCholesky {
         self.refinements
     }
 
+    /// Choose the fill-reducing ordering (takes effect at the next analysis).
+    pub fn with_ordering(mut self, o: FillOrdering) -> Self {
+        self.ordering = o;
+        self.stamp.clear();
+        self
+    }
+
+    pub fn ordering(&self) -> FillOrdering {
+        self.ordering
+    }
+
+    /// Length of the factor's value storage of the current analysis (nonzeros of L for the
+    /// simplicial structure; the supernodal structure also stores the zeros of its dense
+    /// blocks).
+    pub fn factor_len(&self) -> Option<usize> {
+        self.symbolic.as_ref().map(|s| s.len_val())
+    }
+
     /// The factorisation currently held (`None` before a successful `factor`).
     pub fn kind(&self) -> Option<CholeskyKind> {
         self.kind
@@ -527,12 +613,7 @@ impl LinearSolver for FaerCholesky {
         check_square(a)?;
         let n = a.nrows;
         self.n = n;
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: self.structure.threshold(),
-            ..Default::default()
-        };
-        let symbolic = factorize_symbolic_cholesky(csr_as_csc(a), Side::Lower, SymmetricOrdering::Amd, params)
-            .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))?;
+        let symbolic = symbolic_cholesky(a, self.ordering, self.structure)?;
         let par = self.par;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),

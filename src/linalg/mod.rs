@@ -11,6 +11,7 @@ pub mod direct;
 pub mod pcg;
 
 pub use csr::CsrMatrix;
+pub use direct::FillOrdering;
 
 use thiserror::Error;
 
