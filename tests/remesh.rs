@@ -200,9 +200,12 @@ fn nonuniform_state_transfer_converges() {
 /// `remesh::remesh_particle` on a disc deformed into a non-convex, badly distorted shape (a
 /// dent pushed into one side, as a neighbour's corner would, then sheared by 2.5 and squashed
 /// to 0.6 of its height): the monitor asks for a new mesh;
-/// the new one, built on the deformed boundary by the polygon mesher, keeps every old boundary
-/// point (so the contact surface is the same), keeps the area to 1e-12 (the same polygon),
-/// passes the monitor, and carries a linear field over exactly (1e-10).
+/// the new one, built on the deformed boundary by the polygon mesher after coarsening it to
+/// about 2h, keeps the area to 1e-12 (the area-restoring offset), stays within 0.1 h of the old
+/// boundary (the coarsening tolerance 0.05 h plus the offset), passes the monitor, does not
+/// multiply the boundary points when re-meshed again where it stands (at most 1.1 times as
+/// many; without the coarsening the mesher's side midpoints double them at every re-mesh), and carries a linear field over exactly (1e-10) at the
+/// points inside the old mesh and to |∇f| × 0.1 h at the others (clamped to the old boundary).
 #[test]
 fn remesh_particle_keeps_boundary_and_area_and_passes_the_monitor() {
     let old = shapes::disc([0.0, 0.0], 10.0, 1.5);
@@ -223,12 +226,27 @@ fn remesh_particle_keeps_boundary_and_area_and_passes_the_monitor() {
     assert!(!after.needs_remesh, "the new mesh must pass: {after:?}");
     let area = remesh::area_check(&old, &x, &new, &new.nodes).unwrap();
     assert!(area.relative_change.abs() < 1e-12, "{area:?}");
-    // every old boundary node is a node of the new boundary
-    let new_boundary: Vec<[f64; 2]> = new.boundary.iter().map(|e| new.nodes[e[0]]).collect();
-    for e in &old.boundary {
-        let p = x[e[0]];
-        assert!(new_boundary.iter().any(|q| (q[0] - p[0]).abs() < 1e-12 && (q[1] - p[1]).abs() < 1e-12), "old boundary point {p:?} lost");
-    }
+    // the new boundary follows the old one and has about as many points
+    let h = 1.5;
+    let dist_to_old = |q: [f64; 2]| {
+        old.boundary
+            .iter()
+            .map(|e| {
+                let (a, b) = (x[e[0]], x[e[1]]);
+                let (d, w) = ([b[0] - a[0], b[1] - a[1]], [q[0] - a[0], q[1] - a[1]]);
+                let t = ((w[0] * d[0] + w[1] * d[1]) / (d[0] * d[0] + d[1] * d[1])).clamp(0.0, 1.0);
+                (w[0] - t * d[0]).hypot(w[1] - t * d[1])
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let shift = new.boundary.iter().map(|e| dist_to_old(new.nodes[e[0]])).fold(0.0, f64::max);
+    assert!(shift <= 0.1 * h, "the new boundary is {shift} mm off the old one");
+    // re-meshing the new mesh where it stands does not multiply its boundary points
+    let again = remesh::remesh_particle(&new, &new.nodes, h).unwrap();
+    assert!(again.boundary.len() as f64 <= 1.1 * new.boundary.len() as f64, "{} boundary edges, then {}", new.boundary.len(), again.boundary.len());
+    let area2 = remesh::area_check(&new, &new.nodes, &again, &again.nodes).unwrap();
+    assert!(area2.relative_change.abs() < 1e-12, "{area2:?}");
+    eprintln!("boundary edges {} -> {} -> {}, largest shift {shift:.3e} mm", old.boundary.len(), new.boundary.len(), again.boundary.len());
     // a linear field moves exactly
     let f = |p: [f64; 2], out: &mut [f64]| out[0] = 2.0 + 0.3 * p[0] - 0.7 * p[1];
     let qp_old = remesh::quadrature_points(&old, &x).unwrap();
@@ -237,8 +255,14 @@ fn remesh_particle_keeps_boundary_and_area_and_passes_the_monitor() {
     let moved = tr.quadrature_field(&field).unwrap();
     let qp_new = remesh::quadrature_points(&new, &new.nodes).unwrap();
     let exact = QuadField::from_fn(&qp_new, 1, f);
-    let worst = (0..exact.n_points()).map(|i| (moved.point(i)[0] - exact.point(i)[0]).abs()).fold(0.0, f64::max);
-    assert!(worst < 1e-10 * 10.0, "linear field error {worst:.3e}");
+    let locator = remesh::PointLocator::new(&old, &x).unwrap();
+    let grad = 0.3_f64.hypot(0.7);
+    for i in 0..exact.n_points() {
+        let err = (moved.point(i)[0] - exact.point(i)[0]).abs();
+        let inside = locator.locate(qp_new[i]).is_ok_and(|l| l.distance <= 1e-12);
+        let bound = if inside { 1e-9 } else { grad * 0.1 * h };
+        assert!(err <= bound, "point {i} (inside the old mesh: {inside}): linear field error {err:.3e}");
+    }
 }
 
 /// `Model::with_body_mesh`: one particle of the 2 × 2 disc job replaced by a new mesh of its
@@ -288,8 +312,9 @@ fn model_with_a_remeshed_body() {
 /// job (J2 aluminium, penalty contact), at mesh size 2 mm, run to solid ratio 0.85
 /// identically; one re-meshes a disc at the same size. The particle areas are unchanged
 /// (1e-12); the transferred state re-converges in place (`Simulation::equilibrate`, Δt = 0)
-/// in at most 6 Newton iterations (measured 6), and after one more step (dt = 0.01 s) the wall
-/// forces of the two agree to the 1 % (measured 0.35 % and 0.01 %). That step itself
+/// in at most 12 Newton iterations (measured 10; 6 before the boundary coarsening, whose
+/// area-restoring offset moves the contact nodes a little), and after one more step (dt = 0.01 s) the wall
+/// forces of the two agree to the 1 % (measured 0.45 % and 0.03 %). That step itself
 /// still takes 17 iterations against 5 (printed, not asserted): the frictionless 2 × 2
 /// columns are an unstable equilibrium, and the re-meshed disc breaks their mirror symmetry.
 /// At the job's own 4 mm the forces differ by 1.4 % (a coarse re-mesh is a different
@@ -323,7 +348,7 @@ fn remeshing_a_disc_mid_run_keeps_the_wall_forces() {
     let t = b.sol.time;
     let its = b.equilibrate().unwrap();
     assert_eq!(b.sol.time, t);
-    assert!(its <= 6, "re-equilibration took {its} Newton iterations");
+    assert!(its <= 12, "re-equilibration took {its} Newton iterations");
     let ra = a.advance(0.01).unwrap();
     let rb = b.advance(0.01).unwrap();
     let _ = std::fs::remove_file(&path);
@@ -339,8 +364,8 @@ fn remeshing_a_disc_mid_run_keeps_the_wall_forces() {
 
 /// `[remesh]` in a whole run, through the command line: one incompressible asphalt octagon
 /// (the paper's 5.2.1 job with a 1 × 1 grid), compacted laterally to solid ratio 0.94 with the
-/// default quality limits, output at every step. Its corner elements cross the limits twice
-/// (measured at φ 0.880 and 0.934). Checked:
+/// default quality limits, output at every step. Its corner elements cross the limits
+/// (measured: once, at φ 0.88). Checked:
 /// - the particle is re-meshed (the `remeshes` history column) and the run reaches 0.94;
 /// - the volume error stays within 1e-8 at every step (measured 1.2e-11; the bound
 ///   for a whole incompressible run is 0.05 %): the re-mesh keeps the particle's area to 1e-12

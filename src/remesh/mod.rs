@@ -293,13 +293,17 @@ mod tests {
     }
 }
 
-/// A new mesh of a deformed particle: its current boundary polygon (every boundary node at
-/// its current position `coords`, in the order of the boundary loop) meshed with
-/// quadrilaterals of size about `h` by [`crate::mesh::polygon::simple_polygon`]. Every old
-/// boundary node stays a node of the new boundary (sides longer than `h` get points in
-/// between, shorter ones are kept: contact zones, where the old boundary is compressed, stay
-/// fine), so the particle's area and its contact surface are unchanged to round-off. The new
-/// mesh's nodes are in the current configuration (its reference = current).
+/// A new mesh of a deformed particle, built on its current boundary (every boundary node at
+/// its current position `coords`, in the order of the boundary loop) with quadrilaterals of
+/// size about `h` by [`crate::mesh::polygon::simple_polygon`]. The new mesh's nodes are in the
+/// current configuration (its reference = current).
+///
+/// The boundary is first coarsened to a spacing of about `2h` ([`coarsen_outline`]: corners
+/// and strongly curved stretches keep their points), because the mesher adds the midpoint of
+/// every side; without it each re-mesh would double the boundary points. The coarsened polygon
+/// is then offset along its vertex normals by the one distance that gives it the old area
+/// back ([`restore_area`]), so the particle's area is unchanged to round-off (1e-12) while its
+/// boundary moves by at most the coarsening tolerance (0.05 `h`) plus that offset.
 ///
 /// # Errors
 /// The checks of the other building blocks, a boundary with more or fewer than one loop, or a
@@ -311,6 +315,207 @@ pub fn remesh_particle(mesh: &Mesh, coords: &[[f64; 2]], h: f64) -> Result<Mesh,
         return Err(RemeshError::BoundaryLoops(loops.len()));
     }
     let outline: Vec<[f64; 2]> = loops[0].iter().map(|&n| coords[n]).collect();
-    crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()))
+    let area = signed_area(&outline);
+    let coarse = restore_area(&coarsen_outline(&outline, 2.0 * h, 0.05 * h, CORNER_DEG), area);
+    match crate::mesh::polygon::simple_polygon(&coarse, h) {
+        Ok(m) => Ok(m),
+        Err(e) => {
+            // the coarse polygon may touch itself where the old one nearly did: mesh the old one
+            tracing::debug!(%e, "coarsened outline refused, meshing the full outline");
+            crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()))
+        }
+    }
 }
 
+/// A boundary point whose sides turn by more than this (degrees) is a corner, always kept by
+/// [`coarsen_outline`].
+pub const CORNER_DEG: f64 = 25.0;
+
+/// Signed area of a closed polygon (positive when counter-clockwise), mm².
+pub fn signed_area(p: &[[f64; 2]]) -> f64 {
+    let n = p.len();
+    0.5 * (0..n).map(|i| {
+        let (a, b) = (p[i], p[(i + 1) % n]);
+        a[0] * b[1] - a[1] * b[0]
+    }).sum::<f64>()
+}
+
+/// The closed outline `p` with points dropped so that the kept ones are about `spacing` apart
+/// along the outline: a point is dropped only when it is not a corner (its sides turn by at
+/// most `corner_deg`) and lies within `tol` of the chord between the kept points around it.
+/// Greedy from a corner (or from point 0 when there is none): from each kept point the next is
+/// the farthest one within `spacing` of arc length whose skipped points all qualify.
+pub fn coarsen_outline(p: &[[f64; 2]], spacing: f64, tol: f64, corner_deg: f64) -> Vec<[f64; 2]> {
+    let n = p.len();
+    if n < 4 || !(spacing > 0.0) {
+        return p.to_vec();
+    }
+    let len = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]).hypot(b[1] - a[1]);
+    let cos_corner = corner_deg.to_radians().cos();
+    let corner: Vec<bool> = (0..n)
+        .map(|i| {
+            let (a, b, c) = (p[(i + n - 1) % n], p[i], p[(i + 1) % n]);
+            let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
+            let (lu, lv) = (u[0].hypot(u[1]), v[0].hypot(v[1]));
+            lu == 0.0 || lv == 0.0 || (u[0] * v[0] + u[1] * v[1]) / (lu * lv) < cos_corner
+        })
+        .collect();
+    let start = corner.iter().position(|&c| c).unwrap_or(0);
+    let at = |k: usize| p[(start + k) % n];
+    let is_corner = |k: usize| corner[(start + k) % n];
+    // distance from q to the chord a–b
+    let off_chord = |q: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let l = dx.hypot(dy);
+        if l == 0.0 {
+            return len(q, a);
+        }
+        ((q[0] - a[0]) * dy - (q[1] - a[1]) * dx).abs() / l
+    };
+    let mut kept = vec![at(0)];
+    let mut k = 0;
+    while k < n {
+        let mut arc = 0.0;
+        let mut best = k + 1;
+        let mut j = k + 1;
+        while j <= n {
+            arc += len(at(j - 1), at(j));
+            if arc > spacing * (1.0 + 1e-9) && j > k + 1 {
+                break;
+            }
+            let ok = (k + 1..j).all(|m| !is_corner(m) && off_chord(at(m), at(k), at(j)) <= tol);
+            if !ok {
+                break;
+            }
+            best = j;
+            if j < n && is_corner(j) {
+                break;
+            }
+            j += 1;
+        }
+        if best >= n {
+            break;
+        }
+        kept.push(at(best));
+        k = best;
+    }
+    if kept.len() < 3 {
+        return p.to_vec();
+    }
+    kept
+}
+
+/// The polygon `p` offset along its vertex normals (the normalised sum of the outward normals
+/// of the two sides at each vertex) by the one distance δ that makes its signed area `area`:
+/// the area of the offset polygon is a quadratic in δ, solved in closed form (the root nearer
+/// zero). Returns `p` unchanged when it already has the area or no root exists.
+pub fn restore_area(p: &[[f64; 2]], area: f64) -> Vec<[f64; 2]> {
+    let n = p.len();
+    let a0 = signed_area(p);
+    let deficit = area - a0;
+    if n < 3 || deficit == 0.0 {
+        return p.to_vec();
+    }
+    // outward normal of side i (p_i → p_{i+1}) of a counter-clockwise polygon is (dy, −dx)/l;
+    // a clockwise polygon has the opposite sign (the area is negative)
+    let sign = if a0 >= 0.0 { 1.0 } else { -1.0 };
+    let side_normal = |i: usize| {
+        let (a, b) = (p[i], p[(i + 1) % n]);
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let l = dx.hypot(dy).max(f64::MIN_POSITIVE);
+        [sign * dy / l, -sign * dx / l]
+    };
+    let normals: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let (a, b) = (side_normal((i + n - 1) % n), side_normal(i));
+            let s = [a[0] + b[0], a[1] + b[1]];
+            let l = s[0].hypot(s[1]);
+            if l > 1e-12 { [s[0] / l, s[1] / l] } else { b }
+        })
+        .collect();
+    let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+    // A(δ) = A₀ + B δ + C δ²
+    let (mut b, mut c) = (0.0, 0.0);
+    for i in 0..n {
+        let j = (i + 1) % n;
+        b += 0.5 * (cross(p[i], normals[j]) + cross(normals[i], p[j]));
+        c += 0.5 * cross(normals[i], normals[j]);
+    }
+    let delta = if c.abs() * deficit.abs() < 1e-12 * b * b {
+        deficit / b
+    } else {
+        let disc = b * b + 4.0 * c * deficit;
+        if disc < 0.0 || b == 0.0 {
+            return p.to_vec();
+        }
+        // the root nearer zero, in the cancellation-free form
+        2.0 * deficit / (b + b.signum() * disc.sqrt())
+    };
+    p.iter().zip(&normals).map(|(q, m)| [q[0] + delta * m[0], q[1] + delta * m[1]]).collect()
+}
+
+
+#[cfg(test)]
+mod outline_tests {
+    use super::*;
+
+    /// A 10 × 10 square with 40 points per side (spacing 0.25), counter-clockwise.
+    fn fine_square() -> Vec<[f64; 2]> {
+        let mut p = Vec::new();
+        let corners = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+        for k in 0..4 {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            for i in 0..40 {
+                let t = i as f64 / 40.0;
+                p.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+            }
+        }
+        p
+    }
+
+    /// Straight sides lose their inner points down to the spacing (here 1.0: 10 sides of 1.0 a
+    /// side, exactly, since the points are equally spaced), the four corners stay, and nothing
+    /// moves (the area is exact, so no offset).
+    #[test]
+    fn coarsening_a_square_keeps_its_corners() {
+        let p = fine_square();
+        let c = coarsen_outline(&p, 1.0, 0.01, CORNER_DEG);
+        assert_eq!(c.len(), 40, "{c:?}");
+        for corner in [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]] {
+            assert!(c.iter().any(|q| q == &corner), "corner {corner:?} dropped");
+        }
+        assert!((signed_area(&c) - 100.0).abs() < 1e-12);
+        assert_eq!(restore_area(&c, 100.0), c);
+    }
+
+    /// A circle of radius 10 as a 256-gon coarsened to spacing 2 loses area (chords); the
+    /// offset gives it back to 1e-12 relative, with every point moved by the same δ, which is
+    /// (lost area)/(perimeter) to first order (within 1 %). Clockwise input works the same.
+    #[test]
+    fn coarsened_circle_gets_its_area_back() {
+        let p: Vec<[f64; 2]> = (0..256)
+            .map(|k| {
+                let t = 2.0 * std::f64::consts::PI * k as f64 / 256.0;
+                [10.0 * t.cos(), 10.0 * t.sin()]
+            })
+            .collect();
+        for poly in [p.clone(), p.iter().rev().copied().collect::<Vec<_>>()] {
+            let a = signed_area(&poly);
+            let c = coarsen_outline(&poly, 2.0, 0.1, CORNER_DEG);
+            assert!(c.len() >= 31 && c.len() <= 40, "{} points", c.len());
+            let lost = a - signed_area(&c);
+            assert!(lost.abs() > 0.1, "coarsening must lose some area: {lost}");
+            let r = restore_area(&c, a);
+            assert!(((signed_area(&r) - a) / a).abs() < 1e-12, "{} vs {a}", signed_area(&r));
+            let moved: Vec<f64> = r.iter().zip(&c).map(|(x, y)| (x[0] - y[0]).hypot(x[1] - y[1])).collect();
+            let perimeter: f64 = (0..c.len()).map(|i| {
+                let (x, y) = (c[i], c[(i + 1) % c.len()]);
+                (y[0] - x[0]).hypot(y[1] - x[1])
+            }).sum();
+            let expected = lost.abs() / perimeter;
+            for m in &moved {
+                assert!((m - expected).abs() < 0.01 * expected, "moved {m} vs {expected}");
+            }
+        }
+    }
+}
