@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("solve_205k");
     g.sample_size(10);
     for kind in [LinearSolverKind::Lu, LinearSolverKind::Cholesky, LinearSolverKind::Pcg] {
-        let opts = SolverOptions { kind, preconditioner: Preconditioner::Ic0, pcg_tol: 1e-8, pcg_max_iterations: 20_000, threads: 1 };
+        let opts = SolverOptions { kind, preconditioner: Preconditioner::Ic0, pcg_tol: 1e-8, pcg_max_iterations: 20_000, threads: 1, ..Default::default() };
         let mut s = make_solver(&opts);
         s.analyze(&kk).expect("analyze");
         let mut x = vec![0.0; b.len()];

@@ -641,6 +641,8 @@ pub struct SolverSpec {
     pub preconditioner: Preconditioner,
     pub pcg_tol: f64,
     pub pcg_max_iterations: usize,
+    /// Fill-reducing ordering of the sparse Cholesky factorisation.
+    pub ordering: crate::linalg::FillOrdering,
     /// 0 = all cores.
     pub threads: usize,
     /// Augmented-Lagrangian penalty for ν = 0.5, in units of the shear modulus.
@@ -661,6 +663,7 @@ impl Default for SolverSpec {
             preconditioner: Preconditioner::Ic0,
             pcg_tol: 1e-10,
             pcg_max_iterations: 10_000,
+            ordering: crate::linalg::FillOrdering::Amd,
             threads: 0,
             incompressible_penalty: 1000.0,
             volume_tol: 1e-10,
@@ -1120,6 +1123,7 @@ mod raw {
         pub line_search: Option<bool>,
         pub linear: Option<String>,
         pub preconditioner: Option<String>,
+        pub ordering: Option<String>,
         pub pcg_tol: Option<f64>,
         pub pcg_max_iterations: Option<i64>,
         pub threads: Option<i64>,
@@ -3059,6 +3063,12 @@ impl Cx<'_> {
             s.preconditioner = match self.choice("solver.preconditioner", v, &["ic0", "jacobi"])? {
                 "ic0" => Preconditioner::Ic0,
                 _ => Preconditioner::Jacobi,
+            };
+        }
+        if let Some(v) = &r.ordering {
+            s.ordering = match self.choice("solver.ordering", v, &["amd", "metis"])? {
+                "amd" => crate::linalg::FillOrdering::Amd,
+                _ => crate::linalg::FillOrdering::Metis,
             };
         }
         if let Some(v) = r.pcg_tol {

@@ -296,6 +296,7 @@ impl Simulation {
             pcg_tol: spec.pcg_tol,
             pcg_max_iterations: spec.pcg_max_iterations,
             threads,
+            ordering: spec.ordering,
         };
         let mut linear = make_solver(&opts);
         if n_free > 0 {

@@ -60,6 +60,8 @@ pub struct SolverOptions {
     pub pcg_max_iterations: usize,
     /// Threads for the numeric factorisation (1 = sequential).
     pub threads: usize,
+    /// Fill-reducing ordering of the sparse Cholesky factorisation (LU always uses COLAMD).
+    pub ordering: direct::FillOrdering,
 }
 
 impl Default for SolverOptions {
@@ -70,6 +72,7 @@ impl Default for SolverOptions {
             pcg_tol: 1e-10,
             pcg_max_iterations: 10_000,
             threads: 1,
+            ordering: direct::FillOrdering::Amd,
         }
     }
 }
@@ -98,7 +101,7 @@ pub struct SolveStats {
 pub fn make_solver(opts: &SolverOptions) -> Box<dyn LinearSolver> {
     match opts.kind {
         LinearSolverKind::Lu => Box::new(direct::FaerLu::new(opts.threads)),
-        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(opts.threads)),
+        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(opts.threads).with_ordering(opts.ordering)),
         LinearSolverKind::Pcg => Box::new(pcg::Pcg::new(
             opts.preconditioner,
             opts.pcg_tol,
