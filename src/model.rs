@@ -248,7 +248,9 @@ impl Model {
     }
 
     /// True when every material has a symmetric tangent, no load is a follower pressure and
-    /// all contact is frictionless, so the global tangent is symmetric.
+    /// all contact is frictionless with the segment normal (the smoothed one has a
+    /// non-symmetric tangent, see [`crate::contact::smooth`]), so the global tangent is
+    /// symmetric.
     pub fn symmetric_tangent(&self) -> bool {
         use crate::contact::kernels::ContactKind;
         let frictionless = |k: &ContactKind| matches!(k, ContactKind::Sliding);
@@ -257,6 +259,7 @@ impl Model {
             && self.loads.iter().all(|l| !matches!(l.kind, LoadKind::Pressure(_)))
             && (!contact || (frictionless(&self.contact.kind) && self.walls.iter().all(|w| frictionless(&w.kind))))
             && (!contact || self.contact.method != crate::case::ContactMethod::Lagrange)
+            && (self.bodies.len() < 2 || self.contact.normal != crate::case::ContactNormal::Smoothed)
     }
 
     /// Why body `b` cannot be re-meshed (its nodes are named by prescribed displacements,

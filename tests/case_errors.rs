@@ -570,6 +570,20 @@ fn lagrange_regularisation_is_checked_and_defaults_to_1e_4() {
     }
 }
 
+/// `[contact] normal` selects the node-to-segment contact normal; a bad value names the key,
+/// the value and the expected values.
+#[test]
+fn contact_normal_is_segment_or_smoothed() {
+    use mpfem::case::ContactNormal;
+    assert_eq!(parse(BASE).unwrap().contact.normal, ContactNormal::default());
+    for (v, n) in [("segment", ContactNormal::Segment), ("smoothed", ContactNormal::Smoothed)] {
+        assert_eq!(parse(&format!("{BASE}\n[contact]\nnormal = \"{v}\"\n")).unwrap().contact.normal, n);
+    }
+    let e = err_of(&format!("{BASE}\n[contact]\nnormal = \"curved\"\n"));
+    assert_eq!(e.key, "contact.normal");
+    assert_has(&e, &["value \"curved\"", "\"segment\"", "\"smoothed\""]);
+}
+
 /// `[contact] viscous_retry` is off by default, on when asked, and refused with viscous springs
 /// (which it would not change), naming the key and the value.
 #[test]

@@ -157,6 +157,15 @@ fn hertz_disc_on_a_rigid_flat_lagrange_multipliers() {
     check_hertz(text.replace("method = \"augmented_lagrangian\"", "method = \"lagrange\""));
 }
 
+/// The same disc with `[contact] normal = "smoothed"`: the disc touches a rigid wall only, whose
+/// node-to-wall kernel the smoothed node-to-segment normal leaves alone; same tolerances.
+#[test]
+fn hertz_disc_on_a_rigid_flat_smoothed_normal() {
+    let text = std::fs::read_to_string("jobs/verification/hertz_disc.toml").unwrap();
+    assert!(text.contains("[contact]\n"));
+    check_hertz(text.replace("[contact]\n", "[contact]\nnormal = \"smoothed\"\n"));
+}
+
 fn check_hertz(text: String) {
     let start = Instant::now();
     let c = case::parse(&text, std::path::Path::new("jobs/verification")).unwrap();

@@ -8,10 +8,11 @@
 //! (Uzawa) and solve again → [`ContactProblem::commit`].
 
 use super::kernels::{self, ContactKind, PairHistory, PairOut, PenaltyParams, Wall, WallOut};
+use super::smooth::{self, SmoothPairOut};
 use super::search::{boundary_of, ContactSearch};
 use super::Segment;
 use crate::assembly::FIXED;
-use crate::case::{ContactMethod, ContactSpec, WallSide, WallSpec};
+use crate::case::{ContactMethod, ContactNormal, ContactSpec, WallSide, WallSpec};
 use crate::linalg::CsrMatrix;
 use crate::model::Model;
 use std::collections::HashMap;
@@ -137,6 +138,9 @@ pub struct ContactProblem {
     pub walls: Vec<WallSpec>,
     pub spec: ContactSpec,
     pub segments: Vec<Segment>,
+    /// Per segment: the boundary node before its first node and the one after its second node
+    /// on the same body (the neighbours of the smoothed master surface), if any.
+    pub neighbours: Vec<[Option<usize>; 2]>,
     /// Boundary nodes: (node, body).
     pub slaves: Vec<(usize, usize)>,
     /// Tributary (reference) boundary length of each slave node (mm).
@@ -287,10 +291,27 @@ impl ContactProblem {
         let nw = walls.len();
         let ns = slaves.len();
         let search = ContactSearch::new(segments.clone());
+        // boundary neighbours: the segment ending at a segment's first node and the one
+        // starting at its second node (unique on a closed boundary loop)
+        let mut ending: HashMap<usize, Vec<usize>> = HashMap::new();
+        let mut starting: HashMap<usize, Vec<usize>> = HashMap::new();
+        for (k, s) in segments.iter().enumerate() {
+            starting.entry(s.nodes[0]).or_default().push(k);
+            ending.entry(s.nodes[1]).or_default().push(k);
+        }
+        let neighbours = segments
+            .iter()
+            .map(|s| {
+                let prev = ending.get(&s.nodes[0]).filter(|v| v.len() == 1).map(|v| segments[v[0]].nodes[0]);
+                let next = starting.get(&s.nodes[1]).filter(|v| v.len() == 1).map(|v| segments[v[0]].nodes[1]);
+                [prev, next]
+            })
+            .collect();
         Some(Self {
             walls,
             spec,
             segments,
+            neighbours,
             slaves,
             area,
             body_h,
@@ -309,6 +330,42 @@ impl ContactProblem {
             trial_nodal: NodalContact::default(),
             nodal: NodalContact::default(),
         })
+    }
+
+    fn smoothed(&self) -> bool {
+        self.spec.normal == ContactNormal::Smoothed
+    }
+
+    /// The smoothed master surface of segment `seg` at configuration `x`.
+    fn master(&self, seg: usize, x: &[[f64; 2]]) -> smooth::Master {
+        let s = self.segments[seg];
+        let [prev, next] = self.neighbours[seg];
+        smooth::Master { x1: x[s.nodes[0]], x2: x[s.nodes[1]], prev: prev.map(|n| x[n]), next: next.map(|n| x[n]) }
+    }
+
+    /// Global dofs of a smoothed pair in the kernel's order [s, 1, 2, 0, 3]; an absent
+    /// neighbour takes the dofs of the segment's own end node (its entries are zero).
+    fn smooth_dofs(&self, node: usize, seg: usize) -> ([usize; smooth::NDOF], [usize; 5]) {
+        let s = self.segments[seg];
+        let [prev, next] = self.neighbours[seg];
+        let nodes = [node, s.nodes[0], s.nodes[1], prev.unwrap_or(s.nodes[0]), next.unwrap_or(s.nodes[1])];
+        let mut d = [0; smooth::NDOF];
+        for (i, &n) in nodes.iter().enumerate() {
+            d[2 * i] = 2 * n;
+            d[2 * i + 1] = 2 * n + 1;
+        }
+        (d, nodes)
+    }
+
+    /// Projection parameter ξ of `node` on segment `seg` (straight or smoothed).
+    fn xi_of(&self, node: usize, seg: usize, x: &[[f64; 2]]) -> f64 {
+        let s = self.segments[seg];
+        let straight = || kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]).xi;
+        if self.smoothed() {
+            smooth::smooth_project(x[node], &self.master(seg, x)).map_or_else(straight, |g| g.xi)
+        } else {
+            straight()
+        }
     }
 
     fn h_of(&self, body: usize) -> f64 {
@@ -377,19 +434,34 @@ impl ContactProblem {
         let mut best: HashMap<usize, (f64, Vec<usize>)> = HashMap::new();
         for (node, seg) in candidates {
             let s = self.segments[seg];
-            let g = kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]);
-            if !(g.xi >= -0.02 && g.xi <= 1.02) {
+            let (xi, gap, d) = if self.smoothed() {
+                // closest point on the smoothed surface; outside [0, 1] the distance to the
+                // segment's end node (the neighbour segment then wins)
+                let Some(g) = smooth::smooth_project(x[node], &self.master(seg, x)) else { continue };
+                let end = |p: [f64; 2]| ((x[node][0] - p[0]).powi(2) + (x[node][1] - p[1]).powi(2)).sqrt();
+                let d = if g.xi < 0.0 {
+                    end(x[s.nodes[0]])
+                } else if g.xi > 1.0 {
+                    end(x[s.nodes[1]])
+                } else {
+                    g.gap.abs()
+                };
+                (g.xi, g.gap, d)
+            } else {
+                let g = kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]);
+                (g.xi, g.gap, super::search::point_segment_distance(x[node], x[s.nodes[0]], x[s.nodes[1]]))
+            };
+            if !(xi >= -0.02 && xi <= 1.02) {
                 continue;
             }
-            let d = super::search::point_segment_distance(x[node], x[s.nodes[0]], x[s.nodes[1]]);
             let si = slave_index[&node];
-            if g.gap < -self.h_of(self.slaves[si].1) {
+            if gap < -self.h_of(self.slaves[si].1) {
                 continue; // deeper than an element: not a physical contact of this node
             }
             // a tie is bilateral: only nodes that touch, or have passed the surface within the
             // step (a wall or particle moving faster than the touch band), or were tied before
             if matches!(self.spec.kind, ContactKind::Cohering)
-                && g.gap > TOUCH * self.h_of(self.slaves[si].1)
+                && gap > TOUCH * self.h_of(self.slaves[si].1)
                 && !self.nts_hist.get(&(node, seg)).is_some_and(|h| h.active)
             {
                 continue;
@@ -425,8 +497,7 @@ impl ContactProblem {
         if matches!(self.spec.kind, ContactKind::Cohering) {
             for p in &self.pairs {
                 let node = self.slaves[p.slave].0;
-                let s = self.segments[p.segment];
-                let xi = kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]).xi;
+                let xi = self.xi_of(node, p.segment, x);
                 self.nts_hist.entry((node, p.segment)).or_insert(PairHistory { xi_stick: xi, lambda_n: 0.0, lambda_t: 0.0, active: true });
             }
         }
@@ -484,7 +555,11 @@ impl ContactProblem {
                     let p = self.pairs[k];
                     let s = self.segments[p.segment];
                     let n = self.slaves[p.slave].0;
-                    vec![2 * n, 2 * n + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1]
+                    if self.smoothed() {
+                        self.smooth_dofs(n, p.segment).0.to_vec()
+                    } else {
+                        vec![2 * n, 2 * n + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1]
+                    }
                 }
                 Candidate::Wall { slave, .. } => {
                     let n = self.slaves[slave].0;
@@ -504,43 +579,76 @@ impl ContactProblem {
         let walls: Vec<Wall> = self.walls.iter().map(|w| Wall::from_spec(w, t)).collect();
         let no_penalty = PenaltyParams { eps_n: 0.0, eps_t: 0.0 };
         let mut out = PairOut::default();
+        let mut sout = SmoothPairOut::default();
         for (k, &cand) in self.lm.candidates.iter().enumerate() {
             let lambda = self.lm.lambda[k];
-            let (dofs, grad, gap, area, c): (Vec<usize>, Vec<f64>, f64, f64, f64) = match cand {
+            // the force column −λ A ∇g and the constraint row −A ∇g: the same gradient except for
+            // the smoothed normal, whose force is taken at fixed end angles (see `smooth`)
+            let (dofs, grad, row_grad, gap, area, c): (Vec<usize>, Vec<f64>, Vec<f64>, f64, f64, f64) = match cand {
                 Candidate::Pair(q) => {
                     let p = self.pairs[q];
                     let (node, body) = self.slaves[p.slave];
                     let s = self.segments[p.segment];
                     let (xs, x1, x2) = (x[node], x[s.nodes[0]], x[s.nodes[1]]);
-                    let g = kernels::nts_project(xs, x1, x2);
                     let area = self.area[p.slave] * p.weight;
                     let c = self.params(body, Some(s.body)).eps_n;
-                    if !g.gap.is_finite() {
-                        self.lm.rows[k] = -area * lambda;
-                        self.lm.scale[k] = c;
-                        self.trial_nts[q] = PairHistory::default();
-                        continue;
-                    }
-                    let (n, xi) = (g.normal, g.xi);
-                    let grad = vec![n[0], n[1], -(1.0 - xi) * n[0], -(1.0 - xi) * n[1], -xi * n[0], -xi * n[1]];
-                    let dofs = vec![2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
-                    // force and geometric stiffness of the pressure λ: the penalty kernel with a
-                    // zero penalty and λ as its multiplier
-                    if lambda > 0.0 && lambda - c * g.gap > 0.0 {
-                        let hist = PairHistory { xi_stick: xi, lambda_n: lambda, lambda_t: 0.0, active: true };
-                        kernels::nts_pair(xs, x1, x2, area, ContactKind::Sliding, &no_penalty, &hist, &mut out);
-                        if let Some((m, eq, _)) = kk.as_mut() {
-                            add_block(m, eq, &[dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]], &out.k);
+                    if self.smoothed() {
+                        let master = self.master(p.segment, x);
+                        let (dofs, _) = self.smooth_dofs(node, p.segment);
+                        // the kernel with a zero penalty and λ as its multiplier gives ∇g and,
+                        // when λ carries, the geometric stiffness −λ A ∇∇g
+                        let hist = PairHistory { xi_stick: 0.0, lambda_n: lambda.max(0.0), lambda_t: 0.0, active: true };
+                        smooth::nts_smooth_pair(xs, &master, area, ContactKind::Sliding, &no_penalty, &hist, &mut sout);
+                        if !sout.gap.is_finite() {
+                            self.lm.rows[k] = -area * lambda;
+                            self.lm.scale[k] = c;
+                            self.trial_nts[q] = PairHistory::default();
+                            continue;
                         }
+                        let (grad, row) = if sout.active {
+                            (sout.grad.to_vec(), sout.grad_full.to_vec())
+                        } else {
+                            // the gradients without a force: the kernel with a token multiplier
+                            let token = PairHistory { lambda_n: 1.0, ..hist };
+                            let mut probe = SmoothPairOut::default();
+                            smooth::nts_smooth_pair(xs, &master, area, ContactKind::Sliding, &no_penalty, &token, &mut probe);
+                            (probe.grad.to_vec(), probe.grad_full.to_vec())
+                        };
+                        if lambda > 0.0 && lambda - c * sout.gap > 0.0 && sout.active {
+                            if let Some((m, eq, _)) = kk.as_mut() {
+                                add_block(m, eq, &dofs, &sout.k);
+                            }
+                        }
+                        (dofs.to_vec(), grad, row, sout.gap, area, c)
+                    } else {
+                        let g = kernels::nts_project(xs, x1, x2);
+                        if !g.gap.is_finite() {
+                            self.lm.rows[k] = -area * lambda;
+                            self.lm.scale[k] = c;
+                            self.trial_nts[q] = PairHistory::default();
+                            continue;
+                        }
+                        let (n, xi) = (g.normal, g.xi);
+                        let grad = vec![n[0], n[1], -(1.0 - xi) * n[0], -(1.0 - xi) * n[1], -xi * n[0], -xi * n[1]];
+                        let dofs = vec![2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
+                        // force and geometric stiffness of the pressure λ: the penalty kernel with a
+                        // zero penalty and λ as its multiplier
+                        if lambda > 0.0 && lambda - c * g.gap > 0.0 {
+                            let hist = PairHistory { xi_stick: xi, lambda_n: lambda, lambda_t: 0.0, active: true };
+                            kernels::nts_pair(xs, x1, x2, area, ContactKind::Sliding, &no_penalty, &hist, &mut out);
+                            if let Some((m, eq, _)) = kk.as_mut() {
+                                add_block(m, eq, &[dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]], &out.k);
+                            }
+                        }
+                        (dofs, grad.clone(), grad, g.gap, area, c)
                     }
-                    (dofs, grad, g.gap, area, c)
                 }
                 Candidate::Wall { wall, slave } => {
                     let (node, body) = self.slaves[slave];
                     let w = &walls[wall];
                     let n = w.normal;
                     let gap = (x[node][0] - w.point[0]) * n[0] + (x[node][1] - w.point[1]) * n[1];
-                    (vec![2 * node, 2 * node + 1], vec![n[0], n[1]], gap, self.area[slave], self.params(body, None).eps_n)
+                    (vec![2 * node, 2 * node + 1], vec![n[0], n[1]], vec![n[0], n[1]], gap, self.area[slave], self.params(body, None).eps_n)
                 }
             };
             // the force −λ A ∇g acts whatever the active set: an inactive candidate's row
@@ -579,13 +687,12 @@ impl ContactProblem {
                     if q == FIXED {
                         continue;
                     }
-                    let v = -c * area * grad[i];
                     if let Some(pos) = m.find(q, row) {
-                        m.values[pos] += v;
+                        m.values[pos] += -c * area * grad[i];
                     }
                     if active {
                         if let Some(pos) = m.find(row, q) {
-                            m.values[pos] += v;
+                            m.values[pos] += -c * area * row_grad[i];
                         }
                     }
                 }
@@ -616,7 +723,19 @@ impl ContactProblem {
     }
 
     /// Node triples (slave, master 1, master 2) that the sparsity pattern must couple.
+    /// With the smoothed normal a pair couples five nodes (s, 1, 2 and the neighbours 0, 3):
+    /// four triples cover every couple of them.
     pub fn couplings(&self) -> Vec<[usize; 3]> {
+        if self.smoothed() {
+            return self
+                .pairs
+                .iter()
+                .flat_map(|p| {
+                    let (_, [s, a, b, p0, p3]) = self.smooth_dofs(self.slaves[p.slave].0, p.segment);
+                    [[s, a, b], [s, p0, p3], [p0, a, p3], [p0, b, p3]]
+                })
+                .collect();
+        }
         self.pairs
             .iter()
             .map(|p| {
@@ -636,12 +755,37 @@ impl ContactProblem {
         let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
         self.trial_nodal.reset(x.len(), self.walls.len());
         let mut out = PairOut::default();
+        let mut sout = SmoothPairOut::default();
+        let smoothed = self.smoothed();
         for (k, p) in self.pairs.iter().enumerate() {
             let (node, body) = self.slaves[p.slave];
             let s = self.segments[p.segment];
             let old = self.nts_hist.get(&(node, p.segment)).copied().unwrap_or_default();
             let params = self.params(body, Some(s.body));
             let kind = self.spec.kind;
+            if smoothed {
+                let master = self.master(p.segment, x);
+                smooth::nts_smooth_pair(x[node], &master, self.area[p.slave] * p.weight, kind, &params, &old, &mut sout);
+                self.trial_nts[k] = sout.new_history;
+                self.aug_nts[k] = smooth::augment(&sout);
+                self.trial_nodal.gap(node, sout.gap);
+                if !sout.active {
+                    continue;
+                }
+                stats.active += 1;
+                stats.max_penetration = stats.max_penetration.max(-sout.gap);
+                stats.violation = stats.violation.max(violation(kind, sout.gap, sout.shear, sout.slip, &old, params.eps_t));
+                self.trial_nodal.active(node, p.weight * sout.pressure, kind, sout.slip);
+                let (dofs, nodes) = self.smooth_dofs(node, p.segment);
+                self.trial_nodal.force(&nodes, &sout.f);
+                for i in 0..smooth::NDOF {
+                    f_int[dofs[i]] += sout.f[i];
+                }
+                if let Some((m, eq, _)) = kk.as_mut() {
+                    add_block(m, eq, &dofs, &sout.k);
+                }
+                continue;
+            }
             kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave] * p.weight, kind, &params, &old, &mut out);
             self.trial_nts[k] = out.new_history;
             self.aug_nts[k] = kernels::augment(&old, &out);

@@ -220,7 +220,7 @@ pub struct PairOut {
 
 /// Which tangential law applies (decides ∇t_T): none, stick (∇t_T = ε_T ∇g_T), or slip with
 /// the signed coefficient μ·sign(t_trial) (∇t_T = μ sign ∇p_N).
-enum TangLaw {
+pub(crate) enum TangLaw {
     None,
     Stick,
     Slip(f64),
@@ -228,7 +228,7 @@ enum TangLaw {
 
 /// Friction law shared by both kernels: returns (t_T, law) given the trial traction
 /// t = λ_T + ε_T g_T and the pressure p_N; `fresh` (no anchor yet) means no tangential force.
-fn friction_law(kind: ContactKind, fresh: bool, t_trial: f64, p: f64) -> (f64, TangLaw) {
+pub(crate) fn friction_law(kind: ContactKind, fresh: bool, t_trial: f64, p: f64) -> (f64, TangLaw) {
     match kind {
         ContactKind::Sliding => (0.0, TangLaw::None),
         ContactKind::Rubbing { mu } if !positive(mu) => (0.0, TangLaw::None),
