@@ -517,14 +517,20 @@ impl Simulation {
                     };
                     if worse {
                         tracing::debug!(body = b, violated = ?q.violated, scaled_jacobian = q.scaled_jacobian.value, aspect_ratio = q.aspect_ratio.value, min_angle = q.min_angle_deg.value, "quality limits crossed");
-                        todo.push(b);
+                        todo.push((q.scaled_jacobian.value, b));
                     }
                 }
                 Ok(_) => {}
                 Err(e) => tracing::warn!(body = b, %e, "quality check failed"),
             }
         }
-        self.remesh_bodies(&todo)
+        // one particle per step, the worst first (a regular grid crosses the limits everywhere
+        // in the same step): each re-equilibration then has one new mesh to balance; the
+        // others follow in the next steps. (On the 16 octagons of 5.2.1 the re-equilibration
+        // of even one re-meshed particle among its neighbours does not converge yet.)
+        todo.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let first: Vec<usize> = todo.iter().take(1).map(|&(_, b)| b).collect();
+        self.remesh_bodies(&first)
     }
 
     /// Whether body `b`'s mesh in the last converged state is within a factor 2 of the quality
