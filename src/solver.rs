@@ -489,17 +489,18 @@ impl Simulation {
         Ok(moved)
     }
 
-    /// After a converged step (`[remesh] enabled`): re-mesh every particle whose mesh, in the
-    /// current configuration, crosses the quality limits, then re-equilibrate. Particles held
-    /// by boundary conditions, loads or output groups are never re-meshed. Returns the number
-    /// of particles re-meshed.
+    /// After a converged step (`[remesh] enabled`): re-mesh the worst of the particles whose
+    /// mesh, in the current configuration, crosses the quality limits (the others follow in
+    /// the next steps), then re-equilibrate. Particles held by boundary conditions, loads or
+    /// output groups are never re-meshed. Returns the number of particles re-meshed (0 or 1).
     fn remesh_after_step(&mut self) -> usize {
         if !self.model.remesh.enabled {
             return 0;
         }
         let limits = self.model.remesh.limits;
         let x = self.coords(&self.sol.u);
-        let mut todo = Vec::new();
+        // (smallest scaled Jacobian, body) of the worst particle that asks for a new mesh
+        let mut worst: Option<(f64, usize)> = None;
         for (b, body) in self.model.bodies.iter().enumerate() {
             if self.model.remesh_constraint(b).is_some() {
                 continue;
@@ -517,7 +518,9 @@ impl Simulation {
                     };
                     if worse {
                         tracing::debug!(body = b, violated = ?q.violated, scaled_jacobian = q.scaled_jacobian.value, aspect_ratio = q.aspect_ratio.value, min_angle = q.min_angle_deg.value, "quality limits crossed");
-                        todo.push((q.scaled_jacobian.value, b));
+                        if worst.is_none_or(|(sj, _)| q.scaled_jacobian.value < sj) {
+                            worst = Some((q.scaled_jacobian.value, b));
+                        }
                     }
                 }
                 Ok(_) => {}
@@ -528,9 +531,7 @@ impl Simulation {
         // in the same step): each re-equilibration then has one new mesh to balance; the
         // others follow in the next steps. (On the 16 octagons of 5.2.1 the re-equilibration
         // of even one re-meshed particle among its neighbours does not converge yet.)
-        todo.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let first: Vec<usize> = todo.iter().take(1).map(|&(_, b)| b).collect();
-        self.remesh_bodies(&first)
+        worst.map_or(0, |(_, b)| usize::from(self.remesh_and_rebalance(b)))
     }
 
     /// Whether body `b`'s mesh in the last converged state is within a factor 2 of the quality
@@ -550,55 +551,42 @@ impl Simulation {
         crate::remesh::check_quality(&body.mesh, xb, &relaxed).is_ok_and(|q| q.needs_remesh)
     }
 
-    /// Re-mesh the bodies `bodies` in the current state (each at `[remesh] mesh_size` or its
-    /// own mesh size), then re-equilibrate the transferred state at the same time and wall
-    /// positions. A body whose re-mesh fails keeps its mesh (a warning says why); a failed
-    /// re-equilibration leaves the transferred state for the next step to balance. Returns the
-    /// number of bodies re-meshed.
-    fn remesh_bodies(&mut self, bodies: &[usize]) -> usize {
-        let started = Instant::now();
-        let mut done = 0;
-        for &b in bodies {
-            if self.total_remeshes >= self.model.remesh.max_remeshes {
-                tracing::warn!(max = self.model.remesh.max_remeshes, "the largest number of re-meshes (remesh.max_remeshes) is reached: no more re-meshing");
-                break;
-            }
-            let h = self.model.remesh.mesh_size.unwrap_or(self.model.bodies[b].mesh_size);
-            let t0 = Instant::now();
-            match self.remesh_body(b, h) {
-                Ok(moved) => {
-                    done += 1;
-                    self.total_remeshes += 1;
-                    let body = &self.model.bodies[b];
-                    let q = crate::remesh::check_quality(&body.mesh, &body.mesh.nodes, &self.model.remesh.limits).ok();
-                    self.remesh_baseline[b] = q.clone().filter(|q| q.needs_remesh);
-                    if let Some(q) = q.filter(|q| q.needs_remesh) {
-                        tracing::warn!(body = b, violated = ?q.violated, "the new mesh itself crosses the quality limits (boundary points are kept); re-meshed again only once it is worse");
-                    }
-                    tracing::info!(
-                        time = self.sol.time,
-                        body = b,
-                        name = %body.name,
-                        elements = body.mesh.n_elements(),
-                        area_change = moved.area.relative_change,
-                        "particle re-meshed"
-                    );
-                }
-                Err(e) => tracing::warn!(body = b, %e, "re-meshing failed: the particle keeps its mesh"),
-            }
-            // (the rebuild's set-up is not counted in any other phase)
-            self.timing.remesh += t0.elapsed().as_secs_f64();
+    /// Re-mesh body `b` in the current state (at `[remesh] mesh_size` or its own mesh size),
+    /// then re-equilibrate the transferred state at the same time and wall positions. A body
+    /// whose re-mesh fails keeps its mesh (a warning says why); a failed re-equilibration leaves
+    /// the transferred state for the next step to balance. Returns whether it was re-meshed.
+    fn remesh_and_rebalance(&mut self, b: usize) -> bool {
+        if self.total_remeshes >= self.model.remesh.max_remeshes {
+            tracing::warn!(max = self.model.remesh.max_remeshes, "the largest number of re-meshes (remesh.max_remeshes) is reached: no more re-meshing");
+            return false;
         }
-        if done > 0 {
-            let t0 = Instant::now();
-            match self.equilibrate() {
-                Ok(its) => tracing::debug!(iterations = its, "re-equilibrated after re-meshing"),
-                Err(e) => tracing::warn!(%e, "re-equilibration after re-meshing failed: the next step starts from the transferred state"),
+        let h = self.model.remesh.mesh_size.unwrap_or(self.model.bodies[b].mesh_size);
+        let t0 = Instant::now();
+        let moved = self.remesh_body(b, h);
+        // (the rebuild's set-up is not counted in any other phase)
+        self.timing.remesh += t0.elapsed().as_secs_f64();
+        let moved = match moved {
+            Ok(m) => m,
+            Err(e) => {
+                tracing::warn!(body = b, %e, "re-meshing failed: the particle keeps its mesh");
+                return false;
             }
-            self.timing.reequilibration += t0.elapsed().as_secs_f64();
+        };
+        self.total_remeshes += 1;
+        let body = &self.model.bodies[b];
+        let q = crate::remesh::check_quality(&body.mesh, &body.mesh.nodes, &self.model.remesh.limits).ok().filter(|q| q.needs_remesh);
+        if let Some(q) = &q {
+            tracing::warn!(body = b, violated = ?q.violated, "the new mesh itself crosses the quality limits (boundary points are kept); re-meshed again only once it is worse");
         }
-        tracing::debug!(done, seconds = started.elapsed().as_secs_f64(), "re-meshing");
-        done
+        self.remesh_baseline[b] = q;
+        tracing::info!(time = self.sol.time, body = b, name = %body.name, elements = body.mesh.n_elements(), area_change = moved.area.relative_change, "particle re-meshed");
+        let t0 = Instant::now();
+        match self.equilibrate() {
+            Ok(its) => tracing::debug!(iterations = its, "re-equilibrated after re-meshing"),
+            Err(e) => tracing::warn!(%e, "re-equilibration after re-meshing failed: the next step starts from the transferred state"),
+        }
+        self.timing.reequilibration += t0.elapsed().as_secs_f64();
+        true
     }
 
     /// Bring the state back into equilibrium at the current time and wall positions (after a
@@ -773,9 +761,8 @@ impl Simulation {
                 remesh_tried = true;
                 if self.model.remesh_constraint(b).is_none() && self.mesh_is_poor(b) {
                     tracing::info!(time = self.sol.time, dt = dt_try, body = b, "an element inverted: re-meshing the particle and retrying the step");
-                    let n = self.remesh_bodies(&[b]);
-                    if n > 0 {
-                        remeshes += n;
+                    if self.remesh_and_rebalance(b) {
+                        remeshes += 1;
                         snapshot = self.contact.as_ref().map(|c| c.snapshot());
                         continue;
                     }

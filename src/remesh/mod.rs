@@ -35,8 +35,8 @@
 //! λ_e), tested exact for a homogeneous history, and
 //! [`crate::solver::Simulation::remesh_body`] re-meshes a body of a running simulation with it
 //! (tested mid-run: wall forces within 1 %). With `[remesh]` in the case
-//! ([`crate::case::RemeshSpec`]) the solver calls it after every converged step for each free
-//! particle that crosses the quality limits, and once per step for the particle of an inverted
+//! ([`crate::case::RemeshSpec`]) the solver calls it after every converged step for the worst
+//! free particle that crosses the quality limits (one per step), and once per step for the particle of an inverted
 //! element when its mesh is already near the limits; then
 //! [`crate::solver::Simulation::equilibrate`] balances the transferred state in place
 //! (Δt = 0: 6 Newton iterations in the mid-run test). The history's `remeshes` column counts
