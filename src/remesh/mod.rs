@@ -296,33 +296,63 @@ mod tests {
 /// A new mesh of a deformed particle, built on its current boundary (every boundary node at
 /// its current position `coords`, in the order of the boundary loop) with quadrilaterals of
 /// size about `h` by [`crate::mesh::polygon::simple_polygon`]. The new mesh's nodes are in the
-/// current configuration (its reference = current).
+/// current configuration (its reference = current). See [`remesh_particle_keeping`], which
+/// this is with no point held.
 ///
-/// The boundary is first coarsened to a spacing of about `2h` ([`coarsen_outline`]: corners
-/// and strongly curved stretches keep their points), because the mesher adds the midpoint of
-/// every side; without it each re-mesh would double the boundary points. The coarsened polygon
-/// is then offset along its vertex normals by the one distance that gives it the old area
-/// back ([`restore_area`]), so the particle's area is unchanged to round-off (1e-12) while its
-/// boundary moves by at most the coarsening tolerance (0.05 `h`) plus that offset.
+/// # Errors
+/// As [`remesh_particle_keeping`].
+pub fn remesh_particle(mesh: &Mesh, coords: &[[f64; 2]], h: f64) -> Result<Mesh, RemeshError> {
+    remesh_particle_keeping(mesh, coords, h, &[])
+}
+
+/// [`remesh_particle`] with the boundary nodes `hold` (node numbers of `mesh`) and their
+/// neighbours along the boundary kept exactly where they are: the nodes in contact, whose positions set the penetrations and with them
+/// the contact forces (a penalty contact penetrates by p/ε, a fraction of a millimetre on the
+/// asphalt jobs; moving a contact face by the coarsening tolerance 0.05 `h` = 1.25 mm there
+/// changed the contact forces by 20 %).
+///
+/// The boundary is first coarsened to a spacing of about `2h` ([`coarsen_outline_keeping`]:
+/// corners, strongly curved stretches and held nodes keep their points), because the mesher
+/// adds the midpoint of every side; without it each re-mesh would double the boundary points.
+/// The coarsened polygon's free points are then offset along their vertex normals by the one
+/// distance that gives it the old area back ([`restore_area_keeping`]), so the particle's area
+/// is unchanged to round-off (1e-12) while its free boundary moves by at most the coarsening
+/// tolerance (0.05 `h`) plus that offset, and a held stretch not at all (the mesher's side
+/// midpoints between two held nodes lie on the old boundary). When every point is held, or the
+/// coarsened polygon is refused, the whole outline is meshed as it is.
 ///
 /// # Errors
 /// The checks of the other building blocks, a boundary with more or fewer than one loop, or a
 /// boundary polygon the mesher refuses (self-intersecting after an inverted element, say).
-pub fn remesh_particle(mesh: &Mesh, coords: &[[f64; 2]], h: f64) -> Result<Mesh, RemeshError> {
+pub fn remesh_particle_keeping(mesh: &Mesh, coords: &[[f64; 2]], h: f64, hold: &[usize]) -> Result<Mesh, RemeshError> {
     check_mesh(mesh, coords)?;
     let loops = mesh.boundary_loops();
     if loops.len() != 1 {
         return Err(RemeshError::BoundaryLoops(loops.len()));
     }
+    let held: std::collections::HashSet<usize> = hold.iter().copied().collect();
     let outline: Vec<[f64; 2]> = loops[0].iter().map(|&n| coords[n]).collect();
+    // the held nodes and their neighbours along the boundary: the sides next to a contact
+    // zone carry the pairs at its edge
+    let m = loops[0].len();
+    let hit: Vec<bool> = loops[0].iter().map(|n| held.contains(n)).collect();
+    let keep: Vec<bool> = (0..m).map(|i| hit[i] || hit[(i + 1) % m] || hit[(i + m - 1) % m]).collect();
     let area = signed_area(&outline);
-    let coarse = restore_area(&coarsen_outline(&outline, 2.0 * h, 0.05 * h, CORNER_DEG), area);
+    let kept = coarsen_outline_keeping(&outline, &keep, 2.0 * h, 0.05 * h, CORNER_DEG);
+    let coarse: Vec<[f64; 2]> = kept.iter().map(|&i| outline[i]).collect();
+    let fixed: Vec<bool> = kept.iter().map(|&i| keep[i]).collect();
+    let restored = restore_area_keeping(&coarse, &fixed, area);
+    let full = || crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()));
+    let Some(coarse) = restored else {
+        tracing::debug!("no free boundary point to restore the area with: meshing the full outline");
+        return full();
+    };
     match crate::mesh::polygon::simple_polygon(&coarse, h) {
         Ok(m) => Ok(m),
         Err(e) => {
             // the coarse polygon may touch itself where the old one nearly did: mesh the old one
             tracing::debug!(%e, "coarsened outline refused, meshing the full outline");
-            crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()))
+            full()
         }
     }
 }
@@ -346,9 +376,16 @@ pub fn signed_area(p: &[[f64; 2]]) -> f64 {
 /// Greedy from a corner (or from point 0 when there is none): from each kept point the next is
 /// the farthest one within `spacing` of arc length whose skipped points all qualify.
 pub fn coarsen_outline(p: &[[f64; 2]], spacing: f64, tol: f64, corner_deg: f64) -> Vec<[f64; 2]> {
+    coarsen_outline_keeping(p, &[], spacing, tol, corner_deg).into_iter().map(|i| p[i]).collect()
+}
+
+/// [`coarsen_outline`] that also keeps every point `i` with `keep[i]` (an empty `keep` holds
+/// none), and returns the indices of the kept points in `p`, in order.
+pub fn coarsen_outline_keeping(p: &[[f64; 2]], keep: &[bool], spacing: f64, tol: f64, corner_deg: f64) -> Vec<usize> {
     let n = p.len();
+    let all = || (0..n).collect::<Vec<usize>>();
     if n < 4 || !(spacing > 0.0) {
-        return p.to_vec();
+        return all();
     }
     let len = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]).hypot(b[1] - a[1]);
     let cos_corner = corner_deg.to_radians().cos();
@@ -357,12 +394,13 @@ pub fn coarsen_outline(p: &[[f64; 2]], spacing: f64, tol: f64, corner_deg: f64) 
             let (a, b, c) = (p[(i + n - 1) % n], p[i], p[(i + 1) % n]);
             let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
             let (lu, lv) = (u[0].hypot(u[1]), v[0].hypot(v[1]));
-            lu == 0.0 || lv == 0.0 || (u[0] * v[0] + u[1] * v[1]) / (lu * lv) < cos_corner
+            keep.get(i).copied().unwrap_or(false) || lu == 0.0 || lv == 0.0 || (u[0] * v[0] + u[1] * v[1]) / (lu * lv) < cos_corner
         })
         .collect();
     let start = corner.iter().position(|&c| c).unwrap_or(0);
-    let at = |k: usize| p[(start + k) % n];
-    let is_corner = |k: usize| corner[(start + k) % n];
+    let idx = |k: usize| (start + k) % n;
+    let at = |k: usize| p[idx(k)];
+    let is_corner = |k: usize| corner[idx(k)];
     // distance from q to the chord a–b
     let off_chord = |q: [f64; 2], a: [f64; 2], b: [f64; 2]| {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -372,7 +410,7 @@ pub fn coarsen_outline(p: &[[f64; 2]], spacing: f64, tol: f64, corner_deg: f64) 
         }
         ((q[0] - a[0]) * dy - (q[1] - a[1]) * dx).abs() / l
     };
-    let mut kept = vec![at(0)];
+    let mut kept = vec![idx(0)];
     let mut k = 0;
     while k < n {
         let mut arc = 0.0;
@@ -396,11 +434,11 @@ pub fn coarsen_outline(p: &[[f64; 2]], spacing: f64, tol: f64, corner_deg: f64) 
         if best >= n {
             break;
         }
-        kept.push(at(best));
+        kept.push(idx(best));
         k = best;
     }
     if kept.len() < 3 {
-        return p.to_vec();
+        return all();
     }
     kept
 }
@@ -410,11 +448,19 @@ pub fn coarsen_outline(p: &[[f64; 2]], spacing: f64, tol: f64, corner_deg: f64) 
 /// the area of the offset polygon is a quadratic in δ, solved in closed form (the root nearer
 /// zero). Returns `p` unchanged when it already has the area or no root exists.
 pub fn restore_area(p: &[[f64; 2]], area: f64) -> Vec<[f64; 2]> {
+    restore_area_keeping(p, &[], area).unwrap_or_else(|| p.to_vec())
+}
+
+/// [`restore_area`] with the points `i` with `fixed[i]` left in place (an empty `fixed` fixes
+/// none): only the free points move along their normals, and the area is still a quadratic
+/// in δ. None when the area is to change but no point is free to change it (or no root
+/// exists).
+pub fn restore_area_keeping(p: &[[f64; 2]], fixed: &[bool], area: f64) -> Option<Vec<[f64; 2]>> {
     let n = p.len();
     let a0 = signed_area(p);
     let deficit = area - a0;
     if n < 3 || deficit == 0.0 {
-        return p.to_vec();
+        return Some(p.to_vec());
     }
     // outward normal of side i (p_i → p_{i+1}) of a counter-clockwise polygon is (dy, −dx)/l;
     // a clockwise polygon has the opposite sign (the area is negative)
@@ -427,6 +473,9 @@ pub fn restore_area(p: &[[f64; 2]], area: f64) -> Vec<[f64; 2]> {
     };
     let normals: Vec<[f64; 2]> = (0..n)
         .map(|i| {
+            if fixed.get(i).copied().unwrap_or(false) {
+                return [0.0, 0.0];
+            }
             let (a, b) = (side_normal((i + n - 1) % n), side_normal(i));
             let s = [a[0] + b[0], a[1] + b[1]];
             let l = s[0].hypot(s[1]);
@@ -441,17 +490,20 @@ pub fn restore_area(p: &[[f64; 2]], area: f64) -> Vec<[f64; 2]> {
         b += 0.5 * (cross(p[i], normals[j]) + cross(normals[i], p[j]));
         c += 0.5 * cross(normals[i], normals[j]);
     }
+    if b == 0.0 {
+        return None;
+    }
     let delta = if c.abs() * deficit.abs() < 1e-12 * b * b {
         deficit / b
     } else {
         let disc = b * b + 4.0 * c * deficit;
-        if disc < 0.0 || b == 0.0 {
-            return p.to_vec();
+        if disc < 0.0 {
+            return None;
         }
         // the root nearer zero, in the cancellation-free form
         2.0 * deficit / (b + b.signum() * disc.sqrt())
     };
-    p.iter().zip(&normals).map(|(q, m)| [q[0] + delta * m[0], q[1] + delta * m[1]]).collect()
+    Some(p.iter().zip(&normals).map(|(q, m)| [q[0] + delta * m[0], q[1] + delta * m[1]]).collect())
 }
 
 
@@ -517,5 +569,45 @@ mod outline_tests {
                 assert!((m - expected).abs() < 0.01 * expected, "moved {m} vs {expected}");
             }
         }
+    }
+
+    /// Held points survive the coarsening even on a straight side (where every other point of
+    /// the side goes), and the area offset moves only the free points: the held ones stay
+    /// bit for bit, the area comes back to 1e-12 relative (a 256-gon coarsened to spacing 2,
+    /// with a quarter of its points held). With every point held there is nothing to offset
+    /// with: None.
+    #[test]
+    fn held_points_stay_where_they_are() {
+        let p = fine_square();
+        let keep: Vec<bool> = (0..p.len()).map(|i| (5..15).contains(&i)).collect();
+        let kept = coarsen_outline_keeping(&p, &keep, 2.0, 0.01, CORNER_DEG);
+        for i in 5..15 {
+            assert!(kept.contains(&i), "held point {i} dropped: {kept:?}");
+        }
+        assert!(kept.len() < 40, "the free sides are still coarsened: {} points", kept.len());
+
+        let circle: Vec<[f64; 2]> = (0..256)
+            .map(|k| {
+                let t = 2.0 * std::f64::consts::PI * k as f64 / 256.0;
+                [10.0 * t.cos(), 10.0 * t.sin()]
+            })
+            .collect();
+        let a = signed_area(&circle);
+        let keep: Vec<bool> = (0..256).map(|i| i < 64).collect();
+        let kept = coarsen_outline_keeping(&circle, &keep, 2.0, 0.1, CORNER_DEG);
+        let c: Vec<[f64; 2]> = kept.iter().map(|&i| circle[i]).collect();
+        let fixed: Vec<bool> = kept.iter().map(|&i| keep[i]).collect();
+        assert_eq!(fixed.iter().filter(|&&f| f).count(), 64);
+        let r = restore_area_keeping(&c, &fixed, a).unwrap();
+        assert!(((signed_area(&r) - a) / a).abs() < 1e-12, "{} vs {a}", signed_area(&r));
+        for ((q, o), f) in r.iter().zip(&c).zip(&fixed) {
+            if *f {
+                assert_eq!(q, o, "a held point moved");
+            } else {
+                assert!((q[0] - o[0]).hypot(q[1] - o[1]) > 0.0, "a free point did not move");
+            }
+        }
+        let all = vec![true; c.len()];
+        assert!(restore_area_keeping(&c, &all, a).is_none());
     }
 }
