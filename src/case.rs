@@ -704,11 +704,17 @@ pub struct OutputSpec {
     /// Write the field results every `every` converged steps (and always the last one);
     /// 0 writes no field results. Default 1.
     pub every: usize,
+    /// Write a restart checkpoint (`checkpoint.h5`) every `checkpoint_every` converged steps;
+    /// 0 (the default): not by step count.
+    pub checkpoint_every: usize,
+    /// Write a restart checkpoint when this much wall-clock time (minutes) has passed since the
+    /// last one (or the start); 0: not by time. Default 30.
+    pub checkpoint_minutes: f64,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { reactions: Vec::new(), displacements: Vec::new(), every: 1 }
+        Self { reactions: Vec::new(), displacements: Vec::new(), every: 1, checkpoint_every: 0, checkpoint_minutes: 30.0 }
     }
 }
 
@@ -1163,6 +1169,8 @@ mod raw {
         pub reactions: Option<Vec<String>>,
         pub displacements: Option<Vec<String>>,
         pub every: Option<i64>,
+        pub checkpoint_every: Option<i64>,
+        pub checkpoint_minutes: Option<f64>,
     }
 }
 
@@ -3139,6 +3147,12 @@ impl Cx<'_> {
         )?;
         if let Some(v) = r.every {
             out.every = self.count("output.every", v, 0)?;
+        }
+        if let Some(v) = r.checkpoint_every {
+            out.checkpoint_every = self.count("output.checkpoint_every", v, 0)?;
+        }
+        if let Some(v) = r.checkpoint_minutes {
+            out.checkpoint_minutes = self.num("output.checkpoint_minutes", v, v >= 0.0, "a wall-clock time in minutes >= 0 (0 = no checkpoint by time)")?;
         }
         Ok(out)
     }

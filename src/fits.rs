@@ -23,7 +23,7 @@ pub const HECKEL_FROM: f64 = 0.1;
 pub const KAWAKITA_FROM: f64 = 0.05;
 
 /// One point of the pressure–density curve.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CurvePoint {
     pub solid_ratio: f64,
     /// Compaction pressure (MPa).

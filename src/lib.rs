@@ -22,6 +22,7 @@ pub mod assembly;
 #[doc(hidden)]
 pub mod bench_support;
 pub mod case;
+pub mod checkpoint;
 pub mod contact;
 pub mod distribute;
 pub mod dynamics;

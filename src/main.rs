@@ -9,7 +9,9 @@
 //! mpfem study STUDY.toml [--out DIR]  several runs of a case side by side: one plot, one table
 //! ```
 //! Exit codes: 0 success, 1 the run or a verification failed (or `plot` could not draw),
-//! 2 bad input (case file, paths, steps).
+//! 2 bad input (case file, paths, steps, a missing or unreadable checkpoint, a case that is not
+//! the checkpoint's), 3 `run` stopped by SIGTERM or SIGINT after writing its checkpoint
+//! (continue it with `--restart`), 130 a second SIGTERM/SIGINT ended the run at once.
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -21,6 +23,9 @@ use mpfem::plot::{PlotRequest, RunDir, StepChoice, StepSpec};
 use mpfem::results::ResultsWriter;
 use mpfem::solver::Simulation;
 use std::io::IsTerminal;
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -53,6 +58,15 @@ enum Command {
         /// Do not draw the plots (pressure.png/.svg, snapshot_step_N.png) at the end of the run.
         #[arg(long)]
         no_plots: bool,
+        /// Continue the run from the checkpoint in this folder (its checkpoint.h5, or the file
+        /// itself); history.csv and results.h5 of the output folder keep the steps up to the
+        /// checkpoint and go on from there.
+        #[arg(long, value_name = "DIR")]
+        restart: Option<PathBuf>,
+        /// Restart even when the case file is not the one the checkpoint was written with
+        /// (its SHA-256 differs); the model must still match.
+        #[arg(long, requires = "restart")]
+        allow_case_change: bool,
     },
     /// Redraw the plots of a results folder: wall pressure against solid ratio
     /// (pressure.png, pressure.svg) and snapshots coloured by von Mises stress
@@ -180,7 +194,7 @@ fn main() -> ExitCode {
         Command::Plot { dir, compare, label, steps, out } => plot(dir, compare, label, steps, out),
         Command::Pack { case, out } => pack(&case, &out),
         Command::Study { study, out, parallel } => run_study(&study, &out, parallel),
-        Command::Run { case, out, threads, quiet, no_plots } => {
+        Command::Run { case, out, threads, quiet, no_plots, restart, allow_case_change } => {
             let (c, label) = match &case {
                 Some(p) => match case::load(p) {
                     Ok(c) => (c, p.display().to_string()),
@@ -192,7 +206,15 @@ fn main() -> ExitCode {
                 None => (case::default_case(), "built-in default job (jobs/default.toml)".to_string()),
             };
             let case_file = case.as_ref().map(|p| CaseFile::describe(p));
-            match run(c, &label, case_file, &out, threads, quiet, !no_plots) {
+            let signal = match catch_signals() {
+                Ok(s) => Some(s),
+                Err(e) => {
+                    eprintln!("warning: cannot catch SIGTERM/SIGINT ({e}): a signal ends the run without a checkpoint");
+                    None
+                }
+            };
+            let control = RunControl { signal, restart, allow_case_change };
+            match run(c, &label, case_file, &out, threads, quiet, !no_plots, &control) {
                 Ok(code) => code,
                 Err(e) => {
                     eprintln!("error: {e:#}");
@@ -269,7 +291,7 @@ fn run_study(path: &Path, out: &Path, parallel: Option<usize>) -> ExitCode {
                         eprintln!("error: run \"{}\": cannot write {}: {e}", r.label, case_path.display());
                         2
                     }
-                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true) {
+                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true, &RunControl::default()) {
                         Ok(code) if code == ExitCode::SUCCESS => 0,
                         Ok(_) => 1,
                         Err(e) => {
@@ -535,9 +557,111 @@ fn plots_after_run(out: &Path) {
     }
 }
 
-fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool) -> anyhow::Result<ExitCode> {
+/// How `mpfem run` is controlled from outside the case: the signal that asks it to stop (set by
+/// [`catch_signals`]), the checkpoint to continue from.
+#[derive(Default)]
+struct RunControl {
+    /// The number of the first SIGTERM/SIGINT received (0: none).
+    signal: Option<Arc<AtomicUsize>>,
+    restart: Option<PathBuf>,
+    allow_case_change: bool,
+}
+
+/// SIGTERM (Slurm's pre-emption and time-limit signal) and SIGINT (Ctrl-C) set a flag that the
+/// run reads after each converged step: it then writes a checkpoint, closes its results and
+/// exits with code 3. A second signal ends the process at once (exit code 130).
+fn catch_signals() -> std::io::Result<Arc<AtomicUsize>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let which = Arc::new(AtomicUsize::new(0));
+    let once = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [SIGTERM, SIGINT] {
+        // (registered first: it sees the flag of an earlier signal before this one sets it)
+        signal_hook::flag::register_conditional_shutdown(sig, 130, Arc::clone(&once))?;
+        signal_hook::flag::register(sig, Arc::clone(&once))?;
+        signal_hook::flag::register_usize(sig, Arc::clone(&which), sig as usize)?;
+    }
+    Ok(which)
+}
+
+fn signal_name(sig: usize) -> String {
+    match sig as i32 {
+        signal_hook::consts::SIGTERM => "SIGTERM".into(),
+        signal_hook::consts::SIGINT => "SIGINT".into(),
+        s => format!("signal {s}"),
+    }
+}
+
+/// The CLI's own run state kept in a checkpoint (what the summary needs besides the solver).
+#[derive(serde::Serialize, serde::Deserialize, Default)]
+struct CliState {
+    phi0: Option<f64>,
+    max_body_volume_error: f64,
+    curve: Vec<mpfem::fits::CurvePoint>,
+    /// Wall-clock time of the run so far (s), over its restarts.
+    wall_time_s: f64,
+    /// Time spent writing history.csv so far (s).
+    history_s: f64,
+    /// The checkpoints the run was continued from (for summary.json).
+    restarts: Vec<serde_json::Value>,
+}
+
+/// The SHA-256 a checkpoint records for the case (the built-in default job has no file).
+fn case_hash(case_file: Option<&CaseFile>) -> String {
+    case_file.map_or_else(|| format!("built-in default job of mpfem {}", env!("CARGO_PKG_VERSION")), |c| c.sha256.clone())
+}
+
+/// Copy the files a restarted run continues (history.csv, results.h5) from the checkpoint's
+/// folder into another output folder.
+fn copy_run_files(from: &Path, to: &Path) -> anyhow::Result<()> {
+    let same = match (from.canonicalize(), to.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same {
+        return Ok(());
+    }
+    for name in ["history.csv", "results.h5"] {
+        let (src, dst) = (from.join(name), to.join(name));
+        // (never a file onto itself, which would empty it)
+        let same_file = matches!((src.canonicalize(), dst.canonicalize()), (Ok(a), Ok(b)) if a == b);
+        if src.is_file() && !same_file {
+            std::fs::copy(&src, &dst).with_context(|| format!("cannot copy {} into {}", src.display(), to.display()))?;
+        }
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool, control: &RunControl) -> anyhow::Result<ExitCode> {
     if let Some(t) = threads {
         c.solver.threads = t;
+    }
+    // the checkpoint to continue from, read before anything is written
+    let checkpoint = match &control.restart {
+        None => None,
+        Some(p) => match mpfem::checkpoint::Checkpoint::read(p) {
+            Ok(ck) => Some(ck),
+            Err(e) => {
+                eprintln!("error: cannot restart: {e}");
+                return Ok(ExitCode::from(2));
+            }
+        },
+    };
+    let sha = case_hash(case_file.as_ref());
+    if let Some(ck) = &checkpoint {
+        if ck.case_sha256 != sha {
+            let case = case_file.as_ref().map_or_else(|| "the built-in default job".to_string(), |c| format!("the case file {}", c.path));
+            if control.allow_case_change {
+                eprintln!("warning: {case} (sha256 {sha}) is not the one the checkpoint {} was written with (sha256 {}); restarting anyway (--allow-case-change)", ck.path.display(), ck.case_sha256);
+            } else {
+                eprintln!(
+                    "error: cannot restart: {case} (sha256 {sha}) is not the one the checkpoint {} was written with (sha256 {}); pass --allow-case-change to restart anyway",
+                    ck.path.display(),
+                    ck.case_sha256
+                );
+                return Ok(ExitCode::from(2));
+            }
+        }
     }
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let model = match Model::from_case(&c) {
@@ -547,20 +671,58 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
             return Ok(ExitCode::from(2));
         }
     };
-    let mut history = HistoryWriter::create(out, &model).with_context(|| format!("cannot write {}/history.csv", out.display()))?;
-    // pictures of an earlier run in the same folder would not match the new results
-    mpfem::plot::remove_old_plots(out);
-    let mut results = match c.output.every {
-        0 => None,
-        every => Some(ResultsWriter::create(out, every, &mpfem::output::history_columns(&model)).with_context(|| format!("cannot write the results in {}", out.display()))?),
-    };
     let formulation = format!("{:?}", c.formulation);
     let n_nodes = model.n_nodes();
     let n_elements = model.elements.len();
     let n_bodies = model.bodies.len();
     let title = c.title.clone();
     let started = Instant::now();
-    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone())?;
+    let (mut sim, resumed) = match checkpoint {
+        None => (Simulation::new(model, c.time, c.solver)?, None),
+        Some(ck) => {
+            let (step, time, path) = (ck.step, ck.time, ck.path.clone());
+            let state: CliState = match ck.run_state() {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("error: cannot restart: {e}");
+                    return Ok(ExitCode::from(2));
+                }
+            };
+            let from = match path.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            let sim = match ck.restore(model, c.time, c.solver) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("error: cannot restart: {e}");
+                    return Ok(ExitCode::from(2));
+                }
+            };
+            copy_run_files(&from, out)?;
+            eprintln!("mpfem: restarting from {} at step {step}, t = {time} s", path.display());
+            (sim, Some((step, time, path, state)))
+        }
+    };
+    let columns = mpfem::output::history_columns(&sim.model);
+    let (mut history, mut results) = match &resumed {
+        None => (
+            HistoryWriter::create(out, &sim.model).with_context(|| format!("cannot write {}/history.csv", out.display()))?,
+            match c.output.every {
+                0 => None,
+                every => Some(ResultsWriter::create(out, every, &columns).with_context(|| format!("cannot write the results in {}", out.display()))?),
+            },
+        ),
+        Some((step, ..)) => (
+            HistoryWriter::open_append(out, &sim.model, *step).with_context(|| format!("cannot continue {}/history.csv", out.display()))?,
+            match c.output.every {
+                0 => None,
+                every => Some(ResultsWriter::open_append(out, every, &columns, *step).with_context(|| format!("cannot continue the results in {}", out.display()))?),
+            },
+        ),
+    };
+    // pictures of an earlier run in the same folder would not match the new results
+    mpfem::plot::remove_old_plots(out);
     eprintln!(
         "mpfem: {label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}, end time {} s",
         sim.n_free(),
@@ -586,17 +748,35 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     // every minute
     let mut next_note = 0.1;
     let mut last_note = Instant::now();
-    let mut phi0: Option<f64> = None;
-    let mut max_body_volume_error = 0.0f64;
-    let mut history_s = 0.0;
+    let mut earlier = CliState::default();
+    if let Some((step, time, path, state)) = resumed {
+        earlier = state;
+        earlier.restarts.push(serde_json::json!({ "checkpoint": path.display().to_string(), "step": step, "time": time }));
+    }
+    let mut phi0: Option<f64> = earlier.phi0;
+    let mut max_body_volume_error = earlier.max_body_volume_error;
+    let mut history_s = earlier.history_s;
+    let wall_before = earlier.wall_time_s;
+    let restarts = earlier.restarts.clone();
     // the pressure–density curve for the compaction-law fits: the mean pressure of the moving
     // walls (of every loaded wall when none moves)
     let pressing: Vec<usize> = sim.model.walls.iter().filter(|w| w.velocity != 0.0).map(|w| w.side.index()).collect();
-    let mut curve: Vec<mpfem::fits::CurvePoint> = Vec::new();
+    let mut curve: Vec<mpfem::fits::CurvePoint> = std::mem::take(&mut earlier.curve);
+    // checkpoints: every `checkpoint_every` steps, every `checkpoint_minutes`, and after the
+    // step in which a signal arrived
+    let ckpt_every = c.output.checkpoint_every;
+    let ckpt_interval = (c.output.checkpoint_minutes > 0.0).then(|| std::time::Duration::try_from_secs_f64(60.0 * c.output.checkpoint_minutes).ok()).flatten();
+    let mut last_ckpt = Instant::now();
+    let mut ckpt_s = 0.0;
+    // (step of the last checkpoint written, whether the last attempt failed)
+    let mut ckpt_written: Option<usize> = None;
+    let mut ckpt_failed = false;
     let mut io_error: Option<std::io::Error> = None;
     let mut results_error: Option<mpfem::results::ResultsError> = None;
-    let mut last_report: Option<mpfem::solver::StepReport> = None;
-    let result = sim.run(&mut |s, r| {
+    // (after a restart: the checkpoint's last step, so that a run restarted at its end still
+    // writes its last step and final state)
+    let mut last_report: Option<mpfem::solver::StepReport> = sim.last_report().cloned();
+    let mut result = sim.run_controlled(&mut |s, r| {
         last_report = Some(r.clone());
         max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
         if let Some(c) = &r.compaction {
@@ -645,7 +825,40 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
             }
             last_note = Instant::now();
         }
+        let signal = control.signal.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
+        let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
+        if signal != 0 || due {
+            let t0 = Instant::now();
+            let state = CliState {
+                phi0,
+                max_body_volume_error,
+                curve: curve.clone(),
+                wall_time_s: wall_before + started.elapsed().as_secs_f64(),
+                history_s,
+                restarts: restarts.clone(),
+            };
+            match mpfem::checkpoint::write(out, s, &sha, &state) {
+                Ok(p) => {
+                    bar.suspend(|| eprintln!("mpfem: checkpoint at step {}, t = {:.6e} s: {}", r.step, r.time, p.display()));
+                    ckpt_written = Some(r.step);
+                    ckpt_failed = false;
+                }
+                Err(e) => {
+                    bar.suspend(|| eprintln!("warning: {e}"));
+                    ckpt_failed = true;
+                }
+            }
+            last_ckpt = Instant::now();
+            ckpt_s += t0.elapsed().as_secs_f64();
+        }
+        if signal != 0 {
+            return ControlFlow::Break(format!("interrupted by {}", signal_name(signal)));
+        }
+        ControlFlow::Continue(())
     });
+    if let Ok(s) = result.as_mut() {
+        s.wall_time_s += wall_before;
+    }
     bar.finish_and_clear();
     if let Some(e) = io_error {
         eprintln!("warning: history.csv: {e}");
@@ -660,18 +873,20 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         eprintln!("warning: results: {e}; the steps written before are readable");
     }
     let (status, error, summary) = match &result {
+        Ok(s) if s.interrupted => ("interrupted", None, Some(s)),
         Ok(s) => ("completed", None, Some(s)),
         Err(e) => ("failed", Some(e.to_string()), None),
     };
     let last_step = summary.and_then(|s| s.last.as_ref());
-    let wall_time_s = started.elapsed().as_secs_f64();
-    let output_s = history_s + results.as_ref().map_or(0.0, |w| w.elapsed_s);
+    let wall_time_s = wall_before + started.elapsed().as_secs_f64();
+    let output_s = history_s + ckpt_s + results.as_ref().map_or(0.0, |w| w.elapsed_s);
     let t = &sim.timing;
     let file = SummaryFile {
         mpfem_version: env!("CARGO_PKG_VERSION"),
         title: &title,
         case: case_file.as_ref().map(|c| serde_json::json!({ "path": c.path, "sha256": c.sha256 })),
         status,
+        restarts,
         error: error.clone(),
         formulation,
         n_bodies,
@@ -690,6 +905,24 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     };
     let summary_path = write_summary(out, &file).with_context(|| format!("cannot write {}/summary.json", out.display()))?;
     let code = match result {
+        Ok(s) if s.interrupted => {
+            let again = match (&case_file, ckpt_written == Some(s.steps) && !ckpt_failed) {
+                (_, false) => None,
+                (Some(cf), true) => Some(format!("mpfem run {} --out {} --restart {}", cf.path, out.display(), out.display())),
+                (None, true) => Some(format!("mpfem run --out {} --restart {}", out.display(), out.display())),
+            };
+            eprintln!("mpfem: {} at t = {} s after {} steps; results up to it are in {}", s.stop_reason, s.final_time, s.steps, out.display());
+            match again {
+                Some(cmd) => {
+                    eprintln!("mpfem: continue with: {cmd}");
+                    ExitCode::from(3)
+                }
+                None => {
+                    eprintln!("error: the checkpoint of the last step could not be written");
+                    ExitCode::from(1)
+                }
+            }
+        }
         Ok(s) => {
             eprintln!(
                 "mpfem: completed ({}) t = {} s in {} steps, {} Newton iterations, {} cut-backs, {:.2} s wall; volume error {:.2e}",
@@ -733,7 +966,8 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     // the results file is closed before the plots read it
     drop(results);
     drop(history);
-    if plots {
+    // (a run stopped by a signal exits at once: the batch system's grace period is short)
+    if plots && code != ExitCode::from(3) {
         plots_after_run(out);
     }
     Ok(code)

@@ -82,6 +82,41 @@ impl HistoryWriter {
         Ok(Self { out, path })
     }
 
+    /// Continue `DIR/history.csv` after a restart from step `keep_step`: the rows of steps up
+    /// to `keep_step` stay, later ones (written after the checkpoint) go. A missing file is
+    /// created anew (a warning says the earlier rows are lost); a file with other columns is an
+    /// error.
+    pub fn open_append(dir: &Path, model: &Model, keep_step: usize) -> std::io::Result<Self> {
+        let path = dir.join("history.csv");
+        let header = history_columns(model).join(",");
+        let text = match std::fs::read_to_string(&path) {
+            Ok(t) => t,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                tracing::warn!(path = %path.display(), "restart: no history.csv to continue, the rows before the checkpoint are missing");
+                return Self::create(dir, model);
+            }
+            Err(e) => return Err(e),
+        };
+        let mut lines = text.lines();
+        if lines.next() != Some(header.as_str()) {
+            return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{}: its columns are not those of the case", path.display())));
+        }
+        let mut kept = header.clone();
+        kept.push('\n');
+        for line in lines {
+            let step = line.split(',').next().and_then(|v| v.trim().parse::<usize>().ok());
+            if step.is_some_and(|s| s <= keep_step) {
+                kept.push_str(line);
+                kept.push('\n');
+            }
+        }
+        let tmp = dir.join("history.csv.tmp");
+        std::fs::write(&tmp, kept)?;
+        std::fs::rename(&tmp, &path)?;
+        let out = BufWriter::new(std::fs::OpenOptions::new().append(true).open(&path)?);
+        Ok(Self { out, path })
+    }
+
     pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
         let values = history_values(r);
         for (i, v) in values.iter().enumerate() {
@@ -212,8 +247,12 @@ pub struct SummaryFile<'a> {
     pub title: &'a str,
     /// The case file (path, SHA-256 of its text); None for the built-in default job.
     pub case: Option<serde_json::Value>,
-    /// "completed" or "failed".
+    /// "completed", "failed" or "interrupted" (stopped by a signal after a checkpoint).
     pub status: &'a str,
+    /// The checkpoints this run was continued from (`mpfem run --restart`): path, step and
+    /// time of each, oldest first; absent for a run that never restarted.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub restarts: Vec<serde_json::Value>,
     pub error: Option<String>,
     pub formulation: String,
     pub n_bodies: usize,

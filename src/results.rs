@@ -155,6 +155,74 @@ impl ResultsWriter {
         Ok(w)
     }
 
+    /// Continue `DIR/results.h5` after a restart from step `keep_step`: the output steps and
+    /// history rows up to `keep_step` stay, later ones go, and so does a step at `keep_step`
+    /// that is not an output step (the last step the stopped run wrote on closing), so that
+    /// the file ends as that of an uninterrupted run. A missing file is created anew.
+    pub fn open_append(dir: &Path, every: usize, columns: &[String], keep_step: usize) -> Result<Self, ResultsError> {
+        let h5_path = dir.join("results.h5");
+        if !h5_path.is_file() {
+            tracing::warn!(path = %h5_path.display(), "restart: no results.h5 to continue, the steps before the checkpoint are missing");
+            return Self::create(dir, every, columns);
+        }
+        let file = hdf5::File::open_rw(&h5_path).map_err(|source| ResultsError::Hdf5 { path: h5_path.clone(), source })?;
+        let every = every.max(1);
+        let mut w = Self {
+            file,
+            h5_path,
+            xdmf_path: dir.join("results.xdmf"),
+            walls_xdmf_path: dir.join("walls.xdmf"),
+            every,
+            history_columns: columns.len(),
+            history_rows: 0,
+            elapsed_s: 0.0,
+            steps: Vec::new(),
+            last_step: None,
+        };
+        let h5 = w.h5_path.file_name().map_or_else(|| "results.h5".into(), |s| s.to_string_lossy().into_owned());
+        let (rows, steps, last) = w.h5(|f| {
+            let h = f.dataset("history")?;
+            let shape = h.shape();
+            if shape.len() != 2 || shape[1] != columns.len() {
+                return Err(hdf5::Error::from(format!("/history has shape {shape:?}, the case has {} columns", columns.len())));
+            }
+            let values = h.read_raw::<f64>()?;
+            let rows = values.chunks_exact(columns.len().max(1)).take_while(|r| r.first().is_some_and(|&s| s <= keep_step as f64)).count();
+            h.resize((rows, columns.len()))?;
+            let group = f.group("steps")?;
+            let mut names = group.member_names()?;
+            names.sort();
+            let mut steps = Vec::new();
+            let mut last = None;
+            for name in names {
+                let Ok(step) = name.parse::<usize>() else { continue };
+                if step > keep_step || (step == keep_step && step % every != 0) {
+                    group.unlink(&name)?;
+                    continue;
+                }
+                let g = group.group(&name)?;
+                let time: f64 = g.attr("time")?.read_scalar()?;
+                let n_nodes = g.dataset("coordinates")?.shape()[0];
+                let n_cells = g.dataset("cells")?.shape()[0];
+                let contact = g.link_exists("contact_pressure");
+                let walls = if g.link_exists("wall_id") { Some(g.dataset("wall_id")?.shape()[0]) } else { None };
+                let gp = format!("/steps/{name}");
+                steps.push(WrittenStep {
+                    grid: particle_grid(&h5, &gp, time, n_nodes, n_cells, contact),
+                    walls: walls.map(|n| wall_grid(&h5, &gp, time, n)),
+                });
+                last = Some(step);
+            }
+            f.flush()?;
+            Ok((rows, steps, last))
+        })?;
+        w.history_rows = rows;
+        w.steps = steps;
+        w.last_step = last;
+        w.write_xdmf()?;
+        Ok(w)
+    }
+
     fn h5<T>(&self, op: impl FnOnce(&hdf5::File) -> hdf5::Result<T>) -> Result<T, ResultsError> {
         op(&self.file).map_err(|source| ResultsError::Hdf5 {
             path: self.h5_path.clone(),

@@ -24,7 +24,8 @@ use crate::element::Volumetric;
 use crate::linalg::{make_solver, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
 use crate::material::{ConstitutiveLaw, TimeIncrement};
 use crate::model::Model;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use std::ops::ControlFlow;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -55,7 +56,7 @@ pub enum SolveError {
 }
 
 /// One converged step, as reported to observers and written to the history.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct StepReport {
     pub step: usize,
     pub time: f64,
@@ -87,7 +88,7 @@ pub struct StepReport {
 }
 
 /// Compaction quantities of a step (walls that do not exist report 0).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Compaction {
     /// Total particle area / area enclosed by the walls (0 without four walls).
     pub solid_ratio: f64,
@@ -118,14 +119,18 @@ pub struct RunSummary {
     pub n_free: usize,
     pub n_elements: usize,
     pub last: Option<StepReport>,
-    /// Why the run ended: "end time", "solid ratio reached" or "jammed".
+    /// Why the run ended: "end time", "solid ratio reached", "jammed", or the reason an
+    /// observer gave for stopping the run after a step (e.g. "interrupted by SIGTERM").
     pub stop_reason: String,
+    /// Whether the run was stopped by its observer before its end (see
+    /// [`Simulation::run_controlled`]).
+    pub interrupted: bool,
     /// Wall time spent per phase (s).
     pub timing: Timing,
 }
 
 /// Accumulated wall time per phase of the solution (s).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Timing {
     /// Element kernels and their scatter (residual and tangent).
     pub element_assembly: f64,
@@ -158,6 +163,48 @@ pub struct Solution {
     /// 1 for a mesh built in the undeformed configuration; set by a re-mesh in a deformed
     /// configuration (see the module docs of [`crate::element`]). Constant between re-meshes.
     pub j0: Vec<f64>,
+}
+
+/// The small part of a simulation's state between two steps (counters, energies, the next
+/// step size, the contact histories ...): with [`SimState`]'s arrays, everything a run needs to
+/// continue bit for bit on the same model. Serialised into a checkpoint.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SimScalars {
+    pub time: f64,
+    pub step: usize,
+    /// The last converged step size (the predictor's and the inertial anchor's Δt_{n−1}).
+    pub dt_prev: f64,
+    /// The step size the next step tries.
+    pub next_dt: f64,
+    pub total_iterations: usize,
+    pub total_cutbacks: usize,
+    pub total_remeshes: usize,
+    pub stab_all: bool,
+    pub stab_viscous: bool,
+    pub stab_energy: f64,
+    pub work_ext: f64,
+    pub last_wall_force: Vec<f64>,
+    /// Initial body areas (the volume error's reference, kept over re-meshes).
+    pub area0_body: Vec<f64>,
+    pub area0_total: f64,
+    pub force_floor: f64,
+    pub timing: Timing,
+    pub remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,
+    pub last_report: Option<StepReport>,
+    pub contact: Option<crate::contact::driver::ContactState>,
+}
+
+/// The state of a simulation between two steps that is not rebuilt from its model
+/// ([`Simulation::state`], [`Simulation::set_state`]).
+#[derive(Clone, Debug)]
+pub struct SimState {
+    pub scalars: SimScalars,
+    /// The committed solution (time, u, element fields, multipliers, j₀).
+    pub sol: Solution,
+    /// u_{n−1}: the predictor's and the inertial stabilisation's previous displacement.
+    pub u_prev: Vec<f64>,
+    /// Newmark state u, v, a, g of an implicit dynamic analysis.
+    pub dynamics: Option<[Vec<f64>; 4]>,
 }
 
 /// A converged but uncommitted step.
@@ -231,6 +278,11 @@ pub struct Simulation {
     /// Per body: the quality of its last new mesh when that mesh itself crossed the limits
     /// (it is then re-meshed again only once it has become clearly worse).
     remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,
+    /// The step size the next step of [`Simulation::run`] tries (s): the adaptive step after
+    /// the last converged one.
+    next_dt: f64,
+    /// The report of the last converged step of a run (for the jam test and the summary).
+    last_report: Option<StepReport>,
 }
 
 impl Simulation {
@@ -370,6 +422,8 @@ impl Simulation {
             total_remeshes: 0,
             eq_offset: Vec::new(),
             remesh_baseline: Vec::new(),
+            next_dt: time.dt.min(time.dt_max),
+            last_report: None,
         };
         sim.remesh_baseline = vec![None; sim.model.bodies.len()];
         sim.start_dynamics()?;
@@ -392,6 +446,108 @@ impl Simulation {
         dy.start(&u0, &self.f_int, &self.f_ext, &self.assembler.eq);
         self.dynamics = Some(dy);
         Ok(())
+    }
+
+    /// The state between two steps (after a converged step, or before the first), for a
+    /// checkpoint: with the same model, [`Simulation::set_state`] on a new simulation continues
+    /// the run bit for bit.
+    pub fn state(&self) -> SimState {
+        SimState {
+            scalars: SimScalars {
+                time: self.sol.time,
+                step: self.step,
+                dt_prev: self.dt_prev,
+                next_dt: self.next_dt,
+                total_iterations: self.total_iterations,
+                total_cutbacks: self.total_cutbacks,
+                total_remeshes: self.total_remeshes,
+                stab_all: self.stab_all,
+                stab_viscous: self.stab_viscous,
+                stab_energy: self.stab_energy,
+                work_ext: self.work_ext,
+                last_wall_force: self.last_wall_force.clone(),
+                area0_body: self.area0_body.clone(),
+                area0_total: self.area0_total,
+                force_floor: self.force_floor,
+                timing: self.timing.clone(),
+                remesh_baseline: self.remesh_baseline.clone(),
+                last_report: self.last_report.clone(),
+                contact: self.contact.as_ref().map(|c| c.state()),
+            },
+            sol: self.sol.clone(),
+            u_prev: self.u_prev.clone(),
+            dynamics: self.dynamics.as_ref().map(|d| [d.u.clone(), d.v.clone(), d.a.clone(), d.g.clone()]),
+        }
+    }
+
+    /// Continue from `state` ([`Simulation::state`] of a simulation of the same model, e.g.
+    /// read from a checkpoint).
+    ///
+    /// # Errors
+    /// A message naming what does not fit this simulation's model (sizes of the arrays,
+    /// bodies, walls, contact, dynamics).
+    pub fn set_state(&mut self, state: SimState) -> Result<(), String> {
+        let SimState { scalars: s, sol, u_prev, dynamics } = state;
+        let (n_dofs, ne, nb) = (self.model.n_dofs(), self.model.elements.len(), self.model.bodies.len());
+        let check = |what: &str, got: usize, want: usize| if got == want { Ok(()) } else { Err(format!("{what}: {got} in the checkpoint, {want} in the model")) };
+        check("displacement dofs", sol.u.len(), n_dofs)?;
+        check("previous displacement dofs", u_prev.len(), n_dofs)?;
+        check("element multipliers", sol.lambda.len(), ne)?;
+        check("element initial volume ratios", sol.j0.len(), ne)?;
+        check("element material states", sol.fields.states.len(), ne)?;
+        check("element stresses", sol.fields.sig.len(), ne)?;
+        check("element pressures", sol.fields.pressure.len(), ne)?;
+        check("element volume ratios", sol.fields.theta.len(), ne)?;
+        check("element enhanced modes", sol.fields.alpha.len(), ne)?;
+        check("body areas", s.area0_body.len(), nb)?;
+        check("re-mesh baselines", s.remesh_baseline.len(), nb)?;
+        check("wall forces", s.last_wall_force.len(), self.last_wall_force.len())?;
+        match (self.contact.as_mut(), s.contact) {
+            (Some(c), Some(cs)) => c.set_state(cs)?,
+            (None, None) => {}
+            (have, _) => return Err(format!("contact: the model {} contact, the checkpoint {}", if have.is_some() { "has" } else { "has no" }, if have.is_some() { "has none" } else { "has" })),
+        }
+        match (self.dynamics.as_mut(), dynamics) {
+            (Some(d), Some([u, v, a, g])) => {
+                for (what, x) in [("dynamic displacements", &u), ("velocities", &v), ("accelerations", &a), ("dynamic forces", &g)] {
+                    check(what, x.len(), d.u.len())?;
+                }
+                (d.u, d.v, d.a, d.g) = (u, v, a, g);
+            }
+            (None, None) => {}
+            (have, _) => return Err(format!("the analysis is {} but the checkpoint's is not", if have.is_some() { "dynamic" } else { "quasi-static" })),
+        }
+        self.sol = sol;
+        self.sol.time = s.time;
+        self.u_prev = u_prev;
+        self.step = s.step;
+        self.dt_prev = s.dt_prev;
+        self.next_dt = s.next_dt;
+        self.total_iterations = s.total_iterations;
+        self.total_cutbacks = s.total_cutbacks;
+        self.total_remeshes = s.total_remeshes;
+        self.stab_all = s.stab_all;
+        self.stab_viscous = s.stab_viscous;
+        self.stab_energy = s.stab_energy;
+        self.work_ext = s.work_ext;
+        self.last_wall_force = s.last_wall_force;
+        self.area0_body = s.area0_body;
+        self.area0_total = s.area0_total;
+        self.force_floor = s.force_floor;
+        self.timing = s.timing;
+        self.remesh_baseline = s.remesh_baseline;
+        self.last_report = s.last_report;
+        Ok(())
+    }
+
+    /// The step counter (converged steps so far).
+    pub fn step(&self) -> usize {
+        self.step
+    }
+
+    /// The report of the last converged step of [`Simulation::run`] (kept in a checkpoint).
+    pub fn last_report(&self) -> Option<&StepReport> {
+        self.last_report.as_ref()
     }
 
     pub fn n_free(&self) -> usize {
@@ -512,6 +668,8 @@ impl Simulation {
         next.timing = self.timing.clone();
         next.total_remeshes = self.total_remeshes;
         next.remesh_baseline.clone_from(&self.remesh_baseline);
+        next.next_dt = self.next_dt;
+        next.last_report.clone_from(&self.last_report);
         *self = next;
         Ok(moved)
     }
@@ -786,39 +944,55 @@ impl Simulation {
     /// Run from the current time to the end time, calling `observer` after every converged
     /// step. On error the last committed solution stays in `self.sol`.
     pub fn run(&mut self, observer: &mut dyn FnMut(&Simulation, &StepReport)) -> Result<RunSummary, SolveError> {
+        self.run_controlled(&mut |s, r| {
+            observer(s, r);
+            ControlFlow::Continue(())
+        })
+    }
+
+    /// [`Simulation::run`] with an observer that may stop the run after the step it is shown
+    /// (`ControlFlow::Break(reason)`: the summary's `stop_reason`, `interrupted` set). The
+    /// observer sees the simulation in a state that continues bit for bit (the step size of the
+    /// next step included), so it can write a checkpoint ([`crate::checkpoint`]).
+    pub fn run_controlled(&mut self, observer: &mut dyn FnMut(&Simulation, &StepReport) -> ControlFlow<String>) -> Result<RunSummary, SolveError> {
         let start = Instant::now();
         let t_end = self.time.end;
-        let mut dt = self.time.dt.min(self.time.dt_max);
-        let mut last = None;
         let mut stop_reason = "end time".to_string();
+        let mut interrupted = false;
         while self.sol.time < t_end * (1.0 - 1e-12) {
             if self.step >= self.time.max_steps {
                 return Err(SolveError::TooManySteps(self.time.max_steps));
             }
+            let dt = self.next_dt;
             let remaining = t_end - self.sol.time;
             let dt_try = if remaining <= dt * 1.01 { remaining } else { dt };
             let report = match self.advance(dt_try) {
                 Ok(r) => r,
-                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && self.is_jammed(last.as_ref()) => {
+                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && self.is_jammed(self.last_report.as_ref()) => {
                     tracing::warn!(time, dt, %cause, "the walls cannot advance any more: jammed");
                     stop_reason = "jammed".to_string();
                     break;
                 }
                 Err(e) => return Err(e),
             };
-            dt = if report.cutbacks == 0 && report.newton_iterations <= self.time.easy_iterations {
+            self.next_dt = if report.cutbacks == 0 && report.newton_iterations <= self.time.easy_iterations {
                 (report.dt * self.time.growth).min(self.time.dt_max)
             } else {
                 report.dt
             };
-            observer(self, &report);
+            self.last_report = Some(report.clone());
+            let flow = observer(self, &report);
             let reached = match (&report.compaction, self.model.stop.solid_ratio) {
                 (Some(c), Some(target)) => c.solid_ratio >= target,
                 _ => false,
             };
-            last = Some(report);
             if reached {
                 stop_reason = "solid ratio reached".to_string();
+                break;
+            }
+            if let ControlFlow::Break(reason) = flow {
+                stop_reason = reason;
+                interrupted = true;
                 break;
             }
         }
@@ -833,8 +1007,9 @@ impl Simulation {
             n_dofs: self.model.n_dofs(),
             n_free: self.assembler.n_free,
             n_elements: self.model.elements.len(),
-            last,
+            last: self.last_report.clone(),
             stop_reason,
+            interrupted,
             timing: self.timing.clone(),
         })
     }

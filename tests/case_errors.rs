@@ -800,3 +800,22 @@ fn remesh_table_defaults_ranges_and_dynamics() {
     assert_eq!(e.key, "remesh.enabled");
     assert_has(&e, &["value true", "time.integrator"]);
 }
+
+#[test]
+fn checkpoint_keys() {
+    // defaults: no checkpoint by step count, one every 30 minutes of wall clock
+    let c = parse(BASE).unwrap();
+    assert_eq!(c.output.checkpoint_every, 0);
+    assert_eq!(c.output.checkpoint_minutes, 30.0);
+    let c = parse(&format!("{BASE}\n[output]\ncheckpoint_every = 5\ncheckpoint_minutes = 2.5\n")).unwrap();
+    assert_eq!(c.output.checkpoint_every, 5);
+    assert_eq!(c.output.checkpoint_minutes, 2.5);
+    let c = parse(&format!("{BASE}\n[output]\ncheckpoint_minutes = 0.0\n")).unwrap();
+    assert_eq!(c.output.checkpoint_minutes, 0.0);
+    let e = err_of(&format!("{BASE}\n[output]\ncheckpoint_every = -2\n"));
+    assert_eq!(e.key, "output.checkpoint_every");
+    assert_has(&e, &["-2", "integer >= 0"]);
+    let e = err_of(&format!("{BASE}\n[output]\ncheckpoint_minutes = -1.0\n"));
+    assert_eq!(e.key, "output.checkpoint_minutes");
+    assert_has(&e, &["-1.0", "minutes >= 0"]);
+}

@@ -72,7 +72,7 @@ fn violation(kind: ContactKind, gap: f64, shear: f64, slip: bool, old: &PairHist
 /// Contact state per node (global node numbers) at one evaluation, for the results files.
 /// Every node-to-segment pair contributes to its slave node (two-pass: each boundary node is a
 /// slave of its own pairs), every node-to-wall pair to its node.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NodalContact {
     /// Normal contact pressure (MPa, ≥ 0 in compression): the sum over the node's pairs of the
     /// pair's share (weight) times its pressure, or the wall pressure when that is larger.
@@ -132,6 +132,22 @@ impl NodalContact {
             self.force[n][1] -= f[2 * i + 1];
         }
     }
+}
+
+/// The committed contact state of a [`ContactProblem`] (global node and segment numbers), see
+/// [`ContactProblem::state`].
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ContactState {
+    /// Node-to-segment pair histories by (slave node, segment), sorted.
+    pub nts: Vec<((usize, usize), PairHistory)>,
+    /// Node-to-wall histories, `[wall][slave]`.
+    pub walls: Vec<Vec<PairHistory>>,
+    /// Committed Lagrange multipliers by candidate key, sorted.
+    pub lm_committed: Vec<((u8, usize, usize), f64)>,
+    /// Nodal contact results of the last committed step.
+    pub nodal: NodalContact,
+    /// Element size of each body used for the default penalty (kept over re-meshes).
+    pub body_h: Vec<f64>,
 }
 
 pub struct ContactProblem {
@@ -941,6 +957,43 @@ impl ContactProblem {
     pub fn restore(&mut self, snap: (HashMap<(usize, usize), PairHistory>, Vec<Vec<PairHistory>>)) {
         self.nts_hist = snap.0;
         self.wall_hist = snap.1;
+    }
+
+    /// The committed contact state that a later step depends on (pair histories, Lagrange
+    /// multipliers, nodal results, the element size per body), for a checkpoint. Everything else
+    /// is rebuilt by the next step's pair selection.
+    pub fn state(&self) -> ContactState {
+        let mut nts: Vec<((usize, usize), PairHistory)> = self.nts_hist.iter().map(|(k, v)| (*k, *v)).collect();
+        nts.sort_by_key(|(k, _)| *k);
+        let mut lm_committed: Vec<((u8, usize, usize), f64)> = self.lm.committed.iter().map(|(k, v)| (*k, *v)).collect();
+        lm_committed.sort_by_key(|(k, _)| *k);
+        ContactState { nts, walls: self.wall_hist.clone(), lm_committed, nodal: self.nodal.clone(), body_h: self.body_h.clone() }
+    }
+
+    /// Set the committed state from [`ContactProblem::state`] of the same model.
+    ///
+    /// # Errors
+    /// A message when the state does not fit this contact problem (walls, boundary nodes,
+    /// bodies).
+    pub fn set_state(&mut self, s: ContactState) -> Result<(), String> {
+        if s.walls.len() != self.wall_hist.len() || s.walls.iter().any(|w| w.len() != self.slaves.len()) {
+            return Err(format!(
+                "contact: {} wall(s) x {} boundary node(s) in the checkpoint, {} x {} in the model",
+                s.walls.len(),
+                s.walls.first().map_or(0, Vec::len),
+                self.wall_hist.len(),
+                self.slaves.len()
+            ));
+        }
+        if s.body_h.len() != self.body_h.len() {
+            return Err(format!("contact: {} bodies in the checkpoint, {} in the model", s.body_h.len(), self.body_h.len()));
+        }
+        self.nts_hist = s.nts.into_iter().collect();
+        self.wall_hist = s.walls;
+        self.lm.committed = s.lm_committed.into_iter().collect();
+        self.nodal = s.nodal;
+        self.body_h = s.body_h;
+        Ok(())
     }
 
     /// Contact kind used between particles.

@@ -38,7 +38,7 @@ impl Default for QualityLimits {
 }
 
 /// The three quality measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum QualityMeasure {
     ScaledJacobian,
     AspectRatio,
@@ -46,14 +46,14 @@ pub enum QualityMeasure {
 }
 
 /// The worst value of one measure over the mesh and the (first) element that has it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Worst {
     pub value: f64,
     pub element: usize,
 }
 
 /// Result of [`check_quality`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct QualityCheck {
     /// True when at least one limit is crossed (`violated` is not empty).
     pub needs_remesh: bool,

@@ -1,0 +1,337 @@
+//! Restart checkpoints: `checkpoint.h5`, everything a run needs to continue bit for bit after
+//! a converged step — the solver state ([`crate::solver::SimState`]), each body's current mesh
+//! (re-meshing replaces meshes mid-run, so a restart cannot rebuild the model from the case
+//! alone) and a record of the caller's own run state (the CLI's pressure–density curve, say).
+//!
+//! ## Layout of `checkpoint.h5`
+//! Every array is global (whole-model numbering, independent of how a run is split over
+//! processes), f64 written and read as IEEE doubles (exact).
+//! - root attributes: `format_version` (u32, [`FORMAT_VERSION`]), `mpfem_version` and
+//!   `case_sha256` (strings: the version that wrote it, the SHA-256 of the case file's text),
+//!   `step` (u64) and `time` (f64, s) of the last converged step;
+//! - `/solution`: `u` and `u_prev` (n_dofs: displacements of the last two converged steps,
+//!   mm), `lambda`, `j0`, `pressure`, `theta` (n_elements), `states` (n_elements × 4 Gauss
+//!   points × 6: the material state `cp_inv[4], eps_p, eps_c`), `sig` (n_elements × 4 × 4,
+//!   Cauchy stress per Gauss point, MPa), `alpha` (n_elements × enhanced modes);
+//! - `/dynamics` (implicit dynamic analyses only): `u`, `v`, `a`, `g` (n_dofs);
+//! - `/meshes/NNNNNN` per body: `nodes` (n × 2, mm, the mesh's reference coordinates),
+//!   `elements` (n × 4, u64), `boundary` (n × 2, u64) and `edge_sets/NAME` (n × 2, u64);
+//! - `scalars` (u8): CBOR of [`crate::solver::SimScalars`] (counters, energies, next step size,
+//!   timing, contact pair histories, the last step's report);
+//! - `run` (u8): CBOR of the caller's record ([`Checkpoint::run_state`]).
+//!
+//! The file is written as `checkpoint.h5.tmp`, flushed and synced to disk, then renamed over
+//! `checkpoint.h5`: a run killed while it writes leaves the previous checkpoint intact.
+
+use crate::case::{SolverSpec, TimeSpec};
+use crate::mesh::Mesh;
+use crate::model::Model;
+use crate::solver::{SimScalars, SimState, Simulation, Solution};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Name of the checkpoint file in a run's output directory.
+pub const FILE_NAME: &str = "checkpoint.h5";
+/// Version of the layout; a checkpoint of another version is refused.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// What can go wrong with a checkpoint.
+#[derive(Debug, Error)]
+pub enum CheckpointError {
+    #[error("{}: no checkpoint there (a run writes one with [output] checkpoint_every or checkpoint_minutes, and when it is stopped by SIGTERM or SIGINT)", path.display())]
+    Missing { path: PathBuf },
+    #[error("{}: not a readable checkpoint: {reason}", path.display())]
+    Corrupt { path: PathBuf, reason: String },
+    #[error("{}: cannot write the checkpoint: {reason}", path.display())]
+    Write { path: PathBuf, reason: String },
+    #[error("{}: the checkpoint does not fit the model of the case: {reason}", path.display())]
+    Mismatch { path: PathBuf, reason: String },
+}
+
+/// A checkpoint read back ([`Checkpoint::read`]).
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    pub path: PathBuf,
+    pub mpfem_version: String,
+    pub case_sha256: String,
+    pub step: usize,
+    pub time: f64,
+    /// Each body's mesh at the checkpoint.
+    pub meshes: Vec<Mesh>,
+    pub state: SimState,
+    run: Vec<u8>,
+}
+
+fn h5err(path: &Path) -> impl Fn(hdf5::Error) -> CheckpointError + '_ {
+    move |e| CheckpointError::Write { path: path.to_path_buf(), reason: e.to_string() }
+}
+
+fn cbor<T: Serialize>(v: &T) -> Result<Vec<u8>, String> {
+    let mut buf = Vec::new();
+    ciborium::into_writer(v, &mut buf).map_err(|e| e.to_string())?;
+    Ok(buf)
+}
+
+fn flat_usize<const N: usize>(v: &[[usize; N]]) -> Vec<u64> {
+    v.iter().flat_map(|a| a.iter().map(|&x| x as u64)).collect()
+}
+
+/// Write `DIR/checkpoint.h5` for the state of `sim` (call between steps, e.g. from the
+/// observer of [`Simulation::run_controlled`]) with `case_sha256` (the case file's SHA-256,
+/// checked on restart) and the caller's record `run`. Returns the path written.
+///
+/// # Errors
+/// [`CheckpointError::Write`] when the file cannot be written; the previous checkpoint is
+/// then still in place.
+pub fn write<T: Serialize>(dir: &Path, sim: &Simulation, case_sha256: &str, run: &T) -> Result<PathBuf, CheckpointError> {
+    let path = dir.join(FILE_NAME);
+    let tmp = dir.join(format!("{FILE_NAME}.tmp"));
+    let werr = |reason: String| CheckpointError::Write { path: path.clone(), reason };
+    let state = sim.state();
+    let scalars = cbor(&state.scalars).map_err(&werr)?;
+    let run = cbor(run).map_err(&werr)?;
+    {
+        let f = hdf5::File::create(&tmp).map_err(h5err(&tmp))?;
+        write_h5(&f, sim, &state, case_sha256, &scalars, &run).map_err(h5err(&tmp))?;
+        f.flush().map_err(h5err(&tmp))?;
+        f.close().map_err(h5err(&tmp))?;
+    }
+    let io = |e: std::io::Error| CheckpointError::Write { path: path.clone(), reason: e.to_string() };
+    std::fs::File::open(&tmp).and_then(|f| f.sync_all()).map_err(io)?;
+    std::fs::rename(&tmp, &path).map_err(io)?;
+    // the rename itself is durable once the directory is synced (best effort)
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(path)
+}
+
+fn write_h5(f: &hdf5::File, sim: &Simulation, st: &SimState, case_sha256: &str, scalars: &[u8], run: &[u8]) -> hdf5::Result<()> {
+    use hdf5::types::VarLenUnicode;
+    let text = |s: &str| -> hdf5::Result<VarLenUnicode> { s.parse().map_err(|e| hdf5::Error::from(format!("{e}"))) };
+    f.new_attr::<u32>().create("format_version")?.write_scalar(&FORMAT_VERSION)?;
+    f.new_attr::<VarLenUnicode>().create("mpfem_version")?.write_scalar(&text(env!("CARGO_PKG_VERSION"))?)?;
+    f.new_attr::<VarLenUnicode>().create("case_sha256")?.write_scalar(&text(case_sha256)?)?;
+    f.new_attr::<u64>().create("step")?.write_scalar(&(st.scalars.step as u64))?;
+    f.new_attr::<f64>().create("time")?.write_scalar(&st.scalars.time)?;
+    f.new_dataset::<u8>().shape(scalars.len()).create("scalars")?.write_raw(scalars)?;
+    f.new_dataset::<u8>().shape(run.len()).create("run")?.write_raw(run)?;
+
+    let sol = &st.sol;
+    let ne = sol.lambda.len();
+    let g = f.create_group("solution")?;
+    g.new_dataset::<f64>().shape(sol.u.len()).create("u")?.write_raw(&sol.u)?;
+    g.new_dataset::<f64>().shape(st.u_prev.len()).create("u_prev")?.write_raw(&st.u_prev)?;
+    for (name, v) in [("lambda", &sol.lambda), ("j0", &sol.j0), ("pressure", &sol.fields.pressure), ("theta", &sol.fields.theta)] {
+        g.new_dataset::<f64>().shape(v.len()).create(name)?.write_raw(v)?;
+    }
+    let states: Vec<f64> = sol.fields.states.iter().flat_map(|gp| gp.iter().flat_map(|q| [q.cp_inv[0], q.cp_inv[1], q.cp_inv[2], q.cp_inv[3], q.eps_p, q.eps_c])).collect();
+    g.new_dataset::<f64>().shape((ne, 4, 6)).create("states")?.write_raw(&states)?;
+    let sig: Vec<f64> = sol.fields.sig.iter().flat_map(|gp| gp.iter().flatten().copied()).collect();
+    g.new_dataset::<f64>().shape((ne, 4, 4)).create("sig")?.write_raw(&sig)?;
+    let n_enh = sol.fields.alpha.first().map_or(0, |a| a.len());
+    let alpha: Vec<f64> = sol.fields.alpha.iter().flatten().copied().collect();
+    g.new_dataset::<f64>().shape((ne, n_enh)).create("alpha")?.write_raw(&alpha)?;
+    if let Some(dy) = &st.dynamics {
+        let g = f.create_group("dynamics")?;
+        for (name, v) in ["u", "v", "a", "g"].iter().zip(dy) {
+            g.new_dataset::<f64>().shape(v.len()).create(*name)?.write_raw(v)?;
+        }
+    }
+    let meshes = f.create_group("meshes")?;
+    for (b, body) in sim.model.bodies.iter().enumerate() {
+        let m = &body.mesh;
+        let g = meshes.create_group(&format!("{b:06}"))?;
+        g.new_attr::<VarLenUnicode>().create("name")?.write_scalar(&text(&body.name)?)?;
+        let nodes: Vec<f64> = m.nodes.iter().flatten().copied().collect();
+        g.new_dataset::<f64>().shape((m.nodes.len(), 2)).create("nodes")?.write_raw(&nodes)?;
+        g.new_dataset::<u64>().shape((m.elements.len(), 4)).create("elements")?.write_raw(&flat_usize(&m.elements))?;
+        g.new_dataset::<u64>().shape((m.boundary.len(), 2)).create("boundary")?.write_raw(&flat_usize(&m.boundary))?;
+        let sets = g.create_group("edge_sets")?;
+        for (name, edges) in &m.edge_sets {
+            sets.new_dataset::<u64>().shape((edges.len(), 2)).create(name.as_str())?.write_raw(&flat_usize(edges))?;
+        }
+    }
+    Ok(())
+}
+
+/// The checkpoint file named by `path`: `path/checkpoint.h5` for a directory (or a path that
+/// does not exist and does not end in `.h5`), otherwise `path` itself.
+pub fn file_of(path: &Path) -> PathBuf {
+    let h5 = path.extension().is_some_and(|e| e == "h5");
+    if path.is_dir() || (!path.exists() && !h5) {
+        path.join(FILE_NAME)
+    } else {
+        path.to_path_buf()
+    }
+}
+
+fn pairs<const N: usize>(v: Vec<u64>, what: &str) -> Result<Vec<[usize; N]>, String> {
+    if v.len() % N != 0 {
+        return Err(format!("{what}: {} values, not a multiple of {N}", v.len()));
+    }
+    Ok(v.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i] as usize)).collect())
+}
+
+impl Checkpoint {
+    /// Read a checkpoint (a file, or a directory holding `checkpoint.h5`).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Missing`] when there is no such file, [`CheckpointError::Corrupt`]
+    /// when it is not a complete checkpoint of this format version.
+    pub fn read(path: &Path) -> Result<Self, CheckpointError> {
+        let path = file_of(path);
+        if !path.is_file() {
+            return Err(CheckpointError::Missing { path });
+        }
+        let corrupt = |reason: String| CheckpointError::Corrupt { path: path.clone(), reason };
+        let f = hdf5::File::open(&path).map_err(|e| corrupt(e.to_string()))?;
+        Self::read_h5(&f, &path).map_err(corrupt)
+    }
+
+    fn read_h5(f: &hdf5::File, path: &Path) -> Result<Self, String> {
+        use hdf5::types::VarLenUnicode;
+        fn e(what: &str) -> impl Fn(hdf5::Error) -> String + '_ {
+            move |err| format!("{what}: {err}")
+        }
+        let version: u32 = f.attr("format_version").and_then(|a| a.read_scalar()).map_err(e("format_version"))?;
+        if version != FORMAT_VERSION {
+            return Err(format!("format version {version}; this mpfem reads version {FORMAT_VERSION}"));
+        }
+        let string = |name: &str| -> Result<String, String> { f.attr(name).and_then(|a| a.read_scalar::<VarLenUnicode>()).map(|s| s.as_str().to_string()).map_err(e(name)) };
+        let mpfem_version = string("mpfem_version")?;
+        let case_sha256 = string("case_sha256")?;
+        let step: u64 = f.attr("step").and_then(|a| a.read_scalar()).map_err(e("step"))?;
+        let time: f64 = f.attr("time").and_then(|a| a.read_scalar()).map_err(e("time"))?;
+        let bytes = |name: &str| -> Result<Vec<u8>, String> { f.dataset(name).and_then(|d| d.read_raw::<u8>()).map_err(e(name)) };
+        let scalars: SimScalars = ciborium::from_reader(bytes("scalars")?.as_slice()).map_err(|err| format!("scalars: {err}"))?;
+        let run = bytes("run")?;
+        let f64s = |name: &str| -> Result<Vec<f64>, String> { f.dataset(name).and_then(|d| d.read_raw::<f64>()).map_err(e(name)) };
+        let u64s = |name: &str| -> Result<Vec<u64>, String> { f.dataset(name).and_then(|d| d.read_raw::<u64>()).map_err(e(name)) };
+
+        let u = f64s("solution/u")?;
+        let u_prev = f64s("solution/u_prev")?;
+        let lambda = f64s("solution/lambda")?;
+        let ne = lambda.len();
+        let per_element = |name: &str, width: usize| -> Result<Vec<f64>, String> {
+            let v = f64s(name)?;
+            if v.len() != ne * width {
+                return Err(format!("{name}: {} values for {ne} elements of {width}", v.len()));
+            }
+            Ok(v)
+        };
+        let j0 = per_element("solution/j0", 1)?;
+        let pressure = per_element("solution/pressure", 1)?;
+        let theta = per_element("solution/theta", 1)?;
+        let states = per_element("solution/states", 24)?;
+        let sig = per_element("solution/sig", 16)?;
+        let mut fields = crate::assembly::ElementFields::new(ne);
+        let n_enh = fields.alpha.first().map_or(0, |a| a.len());
+        let alpha = per_element("solution/alpha", n_enh)?;
+        for el in 0..ne {
+            for gp in 0..4 {
+                let q = &states[24 * el + 6 * gp..24 * el + 6 * gp + 6];
+                fields.states[el][gp] = crate::material::MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
+                for c in 0..4 {
+                    fields.sig[el][gp][c] = sig[16 * el + 4 * gp + c];
+                }
+            }
+            for k in 0..n_enh {
+                fields.alpha[el][k] = alpha[n_enh * el + k];
+            }
+        }
+        fields.pressure = pressure;
+        fields.theta = theta;
+        let dynamics = if f.link_exists("dynamics") {
+            Some([f64s("dynamics/u")?, f64s("dynamics/v")?, f64s("dynamics/a")?, f64s("dynamics/g")?])
+        } else {
+            None
+        };
+        let mut meshes = Vec::new();
+        let mg = f.group("meshes").map_err(e("meshes"))?;
+        let mut names = mg.member_names().map_err(e("meshes"))?;
+        names.sort();
+        for name in names {
+            let p = format!("meshes/{name}");
+            let nodes = f64s(&format!("{p}/nodes"))?;
+            if nodes.len() % 2 != 0 {
+                return Err(format!("{p}/nodes: odd number of coordinates"));
+            }
+            let mut edge_sets = BTreeMap::new();
+            let sets = f.group(&format!("{p}/edge_sets")).map_err(e(&p))?;
+            for s in sets.member_names().map_err(e(&p))? {
+                edge_sets.insert(s.clone(), pairs::<2>(u64s(&format!("{p}/edge_sets/{s}"))?, &s)?);
+            }
+            meshes.push(Mesh {
+                nodes: nodes.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+                elements: pairs::<4>(u64s(&format!("{p}/elements"))?, &p)?,
+                boundary: pairs::<2>(u64s(&format!("{p}/boundary"))?, &p)?,
+                edge_sets,
+            });
+        }
+        let sol = Solution { time: scalars.time, u, fields, lambda, j0 };
+        Ok(Self {
+            path: path.to_path_buf(),
+            mpfem_version,
+            case_sha256,
+            step: step as usize,
+            time,
+            meshes,
+            state: SimState { scalars, sol, u_prev, dynamics },
+            run,
+        })
+    }
+
+    /// The caller's record written with the checkpoint ([`write`]'s `run`).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Corrupt`] when it is not a `T`.
+    pub fn run_state<T: DeserializeOwned>(&self) -> Result<T, CheckpointError> {
+        ciborium::from_reader(self.run.as_slice()).map_err(|e| CheckpointError::Corrupt { path: self.path.clone(), reason: format!("run: {e}") })
+    }
+
+    /// The model at the checkpoint: `base` (the model of the case) with the meshes of the
+    /// bodies that were re-meshed before it.
+    ///
+    /// # Errors
+    /// [`CheckpointError::Mismatch`] when the bodies differ in number or a mesh cannot be set.
+    pub fn model(&self, base: Model) -> Result<Model, CheckpointError> {
+        let mismatch = |reason: String| CheckpointError::Mismatch { path: self.path.clone(), reason };
+        if self.meshes.len() != base.bodies.len() {
+            return Err(mismatch(format!("{} bodies in the checkpoint, {} in the case", self.meshes.len(), base.bodies.len())));
+        }
+        let mut model = base;
+        for (b, mesh) in self.meshes.iter().enumerate() {
+            if !same_mesh(&model.bodies[b].mesh, mesh) {
+                tracing::debug!(body = b, elements = mesh.n_elements(), "restart: the body has its re-meshed mesh");
+                model = model.with_body_mesh(b, mesh.clone()).map_err(|e| mismatch(e.to_string()))?;
+            }
+        }
+        Ok(model)
+    }
+
+    /// The simulation at the checkpoint, on the model of the case `base` ([`Checkpoint::model`])
+    /// with the case's time and solver settings.
+    ///
+    /// # Errors
+    /// [`CheckpointError::Mismatch`] when the checkpoint does not fit the model.
+    pub fn restore(self, base: Model, time: TimeSpec, spec: SolverSpec) -> Result<Simulation, CheckpointError> {
+        let model = self.model(base)?;
+        let path = self.path.clone();
+        let mismatch = |reason: String| CheckpointError::Mismatch { path: path.clone(), reason };
+        let mut sim = Simulation::new(model, time, spec).map_err(|e| mismatch(e.to_string()))?;
+        sim.set_state(self.state).map_err(mismatch)?;
+        Ok(sim)
+    }
+}
+
+/// Whether two meshes are the same, bit for bit.
+fn same_mesh(a: &Mesh, b: &Mesh) -> bool {
+    a.nodes.len() == b.nodes.len()
+        && a.nodes.iter().zip(&b.nodes).all(|(p, q)| p[0].to_bits() == q[0].to_bits() && p[1].to_bits() == q[1].to_bits())
+        && a.elements == b.elements
+        && a.boundary == b.boundary
+}
