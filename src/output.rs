@@ -13,6 +13,8 @@ use std::path::{Path, PathBuf};
 pub struct HistoryWriter {
     out: BufWriter<File>,
     pub path: PathBuf,
+    /// Per column: whether it holds a count (written as an integer).
+    integer: Vec<bool>,
 }
 
 /// Compaction columns (the contact issue's exact names), present when the model has walls or
@@ -79,7 +81,7 @@ impl HistoryWriter {
         let mut out = BufWriter::new(File::create(&path)?);
         writeln!(out, "{}", history_columns(model).join(","))?;
         out.flush()?;
-        Ok(Self { out, path })
+        Ok(Self { out, path, integer: integer_columns(model) })
     }
 
     /// Continue `DIR/history.csv` after a restart from step `keep_step`: the rows of steps up
@@ -114,7 +116,7 @@ impl HistoryWriter {
         std::fs::write(&tmp, kept)?;
         std::fs::rename(&tmp, &path)?;
         let out = BufWriter::new(std::fs::OpenOptions::new().append(true).open(&path)?);
-        Ok(Self { out, path })
+        Ok(Self { out, path, integer: integer_columns(model) })
     }
 
     pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
@@ -123,7 +125,7 @@ impl HistoryWriter {
             if i > 0 {
                 write!(self.out, ",")?;
             }
-            if INTEGER_COLUMNS.contains(&i) || (r.compaction.is_some() && i == ACTIVE_CONTACTS_COLUMN) {
+            if self.integer.get(i).copied().unwrap_or(false) {
                 write!(self.out, "{v}")?;
             } else {
                 write!(self.out, "{v:.9e}")?;
@@ -134,12 +136,14 @@ impl HistoryWriter {
     }
 }
 
-/// Positions of the integer columns of [`history_columns`]: step, newton_iterations,
-/// volume_updates, cutbacks ...
-const INTEGER_COLUMNS: [usize; 4] = [0, 3, 4, 5];
-/// ... and active_contacts when the compaction columns are present (11 general columns, then
-/// the 13 compaction ones, of which it is the 11th).
-const ACTIVE_CONTACTS_COLUMN: usize = 11 + 10;
+/// The columns of [`history_columns`] that hold counts, by name (positions went stale once
+/// when a column was added).
+const INTEGER_COLUMNS: [&str; 6] = ["step", "newton_iterations", "volume_updates", "cutbacks", "remeshes", "active_contacts"];
+
+/// Per column of [`history_columns`]: whether it is written as an integer.
+fn integer_columns(model: &Model) -> Vec<bool> {
+    history_columns(model).iter().map(|c| INTEGER_COLUMNS.contains(&c.as_str())).collect()
+}
 
 /// One row of the history, in the order of [`history_columns`] (integers as exact f64).
 pub fn history_values(r: &StepReport) -> Vec<f64> {

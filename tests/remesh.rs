@@ -401,7 +401,15 @@ fn a_run_with_remeshing_keeps_volume_and_writes_each_mesh() {
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |name: &str| head.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
     let (c_step, c_rm, c_vol, c_phi) = (col("step"), col("remeshes"), col("volume_error"), col("solid_ratio"));
-    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let text_rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // the counts are written as integers (`active_contacts` once came out as 8.000000000e0)
+    for name in ["step", "newton_iterations", "cutbacks", "remeshes", "active_contacts"] {
+        let c = col(name);
+        for r in &text_rows {
+            assert!(r[c].parse::<u64>().is_ok(), "column {name}: {} is not an integer", r[c]);
+        }
+    }
+    let rows: Vec<Vec<f64>> = text_rows.iter().map(|r| r.iter().map(|v| v.parse().unwrap()).collect()).collect();
     let remeshes: f64 = rows.iter().map(|r| r[c_rm]).sum();
     let worst_volume = rows.iter().map(|r| r[c_vol]).fold(0.0, f64::max);
     let last = rows.last().unwrap();
