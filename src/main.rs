@@ -19,7 +19,9 @@ use mpfem::model::Model;
 use mpfem::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
 use mpfem::plot::{PlotRequest, RunDir, StepChoice, StepSpec};
 use mpfem::results::ResultsWriter;
+use mpfem::parallel::Collective;
 use mpfem::solver::Simulation;
+use std::sync::Arc;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -128,13 +130,20 @@ fn restore_sigpipe() {
 fn main() -> ExitCode {
     restore_sigpipe();
     let cli = Cli::parse();
+    // MPI, when the `mpi` feature is on and an MPI launcher started this process (finalised
+    // when `comm` is dropped at the end of `main`); otherwise one serial process
+    let comm = mpfem::parallel::launch();
     let level = match cli.verbose {
+        // ranks other than 0 are silent: rank 0 talks to the user and writes the results
+        _ if !comm.is_root() => "off",
         0 => "warn",
         1 => "info",
         _ => "debug",
     };
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    let filter = match comm.is_root() {
+        true => tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level)),
+        false => tracing_subscriber::EnvFilter::new(level),
+    };
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).init();
 
     match cli.command {
@@ -192,10 +201,12 @@ fn main() -> ExitCode {
                 None => (case::default_case(), "built-in default job (jobs/default.toml)".to_string()),
             };
             let case_file = case.as_ref().map(|p| CaseFile::describe(p));
-            match run(c, &label, case_file, &out, threads, quiet, !no_plots) {
+            match run(c, &label, case_file, &out, threads, quiet, !no_plots, comm.clone()) {
                 Ok(code) => code,
                 Err(e) => {
                     eprintln!("error: {e:#}");
+                    // (an output folder rank 0 alone cannot write: the other ranks would wait)
+                    comm.abort_all(2);
                     ExitCode::from(2)
                 }
             }
@@ -269,7 +280,7 @@ fn run_study(path: &Path, out: &Path, parallel: Option<usize>) -> ExitCode {
                         eprintln!("error: run \"{}\": cannot write {}: {e}", r.label, case_path.display());
                         2
                     }
-                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true) {
+                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true, Arc::new(mpfem::parallel::Serial)) {
                         Ok(code) if code == ExitCode::SUCCESS => 0,
                         Ok(_) => 1,
                         Err(e) => {
@@ -535,9 +546,33 @@ fn plots_after_run(out: &Path) {
     }
 }
 
-fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool) -> anyhow::Result<ExitCode> {
+/// `mpirun -n N mpfem run`, ranks 1..N: the same solve on the same model, no output (rank 0
+/// writes the results and reports). The exit code is the run's.
+fn run_rank(c: &Case, comm: Arc<dyn Collective>) -> anyhow::Result<ExitCode> {
+    let model = match Model::from_case(c) {
+        Ok(m) => m,
+        Err(_) => return Ok(ExitCode::from(2)),
+    };
+    let mut sim = Simulation::new_with(model, c.time, c.solver, comm)?;
+    Ok(match sim.run(&mut |_, _| {}) {
+        Ok(_) => ExitCode::SUCCESS,
+        Err(_) => ExitCode::from(1),
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool, comm: Arc<dyn Collective>) -> anyhow::Result<ExitCode> {
     if let Some(t) = threads {
         c.solver.threads = t;
+    }
+    if comm.size() > 1 && c.solver.threads == 0 {
+        // "every core" is shared by the ranks of a node
+        let local = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE").or_else(|_| std::env::var("MPI_LOCALNRANKS")).ok().and_then(|v| v.parse::<usize>().ok()).unwrap_or(comm.size());
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        c.solver.threads = (cores / local.max(1)).max(1);
+    }
+    if !comm.is_root() {
+        return run_rank(&c, comm);
     }
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let model = match Model::from_case(&c) {
@@ -560,9 +595,11 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     let n_bodies = model.bodies.len();
     let title = c.title.clone();
     let started = Instant::now();
-    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone())?;
+    let ranks = comm.size();
+    let mut sim = Simulation::new_with(model, c.time, c.solver, comm)?;
+    let on_ranks = if ranks > 1 { format!(", {ranks} MPI ranks (solve on rank 0)") } else { String::new() };
     eprintln!(
-        "mpfem: {label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}, end time {} s",
+        "mpfem: {label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
         sim.n_free(),
         sim.linear_solver_name(),
         c.time.end
