@@ -16,6 +16,11 @@ dpkg -s fonts-dejavu-core >/dev/null 2>&1 || need+=(fonts-dejavu-core)
 command -v pvpython >/dev/null 2>&1 || need+=(paraview python3-paraview)
 command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb)
 command -v xauth >/dev/null 2>&1 || need+=(xauth)
+# Open MPI (mpirun, headers) and libclang (bindgen of the mpi-sys crate) for the `mpi` feature
+# and tests/mpi_ranks.rs
+command -v mpirun >/dev/null 2>&1 || need+=(openmpi-bin)
+dpkg -s libopenmpi-dev >/dev/null 2>&1 || need+=(libopenmpi-dev)
+dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
 
 if ((${#need[@]})); then
   echo "setup: installing ${need[*]}"

@@ -206,6 +206,16 @@ impl Assembler {
         (Self { elem_dofs, scatter, eq, n_free, colors }, kk)
     }
 
+    /// Evaluate only the elements `e` with `keep[e]` from now on (a process of a distributed
+    /// run assembles the elements it owns; the others leave their entries of the force, the
+    /// tangent and the element fields alone). Kept elements keep their colour order.
+    pub fn retain_elements(&mut self, keep: &[bool]) {
+        for color in &mut self.colors {
+            color.retain(|&e| keep.get(e).copied().unwrap_or(false));
+        }
+        self.colors.retain(|c| !c.is_empty());
+    }
+
     /// Assemble the internal force `f_int` (all dofs, N/mm) and, if `kk` is given, the tangent
     /// on the free dofs, for nodal displacements `u` (dof `2 n + c`), committed states `old` and the element
     /// volumetric data `vol`. Gauss-point results go to `fields`. Every element's reference

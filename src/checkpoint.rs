@@ -319,10 +319,19 @@ impl Checkpoint {
     /// # Errors
     /// [`CheckpointError::Mismatch`] when the checkpoint does not fit the model.
     pub fn restore(self, base: Model, time: TimeSpec, spec: SolverSpec) -> Result<Simulation, CheckpointError> {
+        self.restore_with(base, time, spec, std::sync::Arc::new(crate::parallel::Serial))
+    }
+
+    /// [`Checkpoint::restore`] on the processes `comm` (every rank reads the same global
+    /// state; the rank count may differ from the one that wrote it).
+    ///
+    /// # Errors
+    /// As [`Checkpoint::restore`].
+    pub fn restore_with(self, base: Model, time: TimeSpec, spec: SolverSpec, comm: std::sync::Arc<dyn crate::parallel::Collective>) -> Result<Simulation, CheckpointError> {
         let model = self.model(base)?;
         let path = self.path.clone();
         let mismatch = |reason: String| CheckpointError::Mismatch { path: path.clone(), reason };
-        let mut sim = Simulation::new(model, time, spec).map_err(|e| mismatch(e.to_string()))?;
+        let mut sim = Simulation::new_with(model, time, spec, comm).map_err(|e| mismatch(e.to_string()))?;
         sim.set_state(self.state).map_err(mismatch)?;
         Ok(sim)
     }

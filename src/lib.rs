@@ -35,6 +35,7 @@ pub mod model;
 pub mod output;
 pub mod results;
 pub mod packing;
+pub mod parallel;
 pub mod plot;
 pub mod remesh;
 pub mod solver;

@@ -21,11 +21,12 @@ use mpfem::model::Model;
 use mpfem::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
 use mpfem::plot::{PlotRequest, RunDir, StepChoice, StepSpec};
 use mpfem::results::ResultsWriter;
+use mpfem::parallel::Collective;
 use mpfem::solver::Simulation;
+use std::sync::Arc;
 use std::io::IsTerminal;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -142,13 +143,20 @@ fn restore_sigpipe() {
 fn main() -> ExitCode {
     restore_sigpipe();
     let cli = Cli::parse();
+    // MPI, when the `mpi` feature is on and an MPI launcher started this process (finalised
+    // when `comm` is dropped at the end of `main`); otherwise one serial process
+    let comm = mpfem::parallel::launch();
     let level = match cli.verbose {
+        // ranks other than 0 are silent: rank 0 talks to the user and writes the results
+        _ if !comm.is_root() => "off",
         0 => "warn",
         1 => "info",
         _ => "debug",
     };
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    let filter = match comm.is_root() {
+        true => tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level)),
+        false => tracing_subscriber::EnvFilter::new(level),
+    };
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).init();
 
     match cli.command {
@@ -214,10 +222,12 @@ fn main() -> ExitCode {
                 }
             };
             let control = RunControl { signal, restart, allow_case_change };
-            match run(c, &label, case_file, &out, threads, quiet, !no_plots, &control) {
+            match run(c, &label, case_file, &out, threads, quiet, !no_plots, &control, comm.clone()) {
                 Ok(code) => code,
                 Err(e) => {
                     eprintln!("error: {e:#}");
+                    // (an output folder rank 0 alone cannot write: the other ranks would wait)
+                    comm.abort_all(2);
                     ExitCode::from(2)
                 }
             }
@@ -291,7 +301,7 @@ fn run_study(path: &Path, out: &Path, parallel: Option<usize>) -> ExitCode {
                         eprintln!("error: run \"{}\": cannot write {}: {e}", r.label, case_path.display());
                         2
                     }
-                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true, &RunControl::default()) {
+                    Ok(()) => match run(c, &format!("{} ({})", r.label, case_path.display()), Some(CaseFile::describe(&case_path)), &dir, Some(1), true, true, &RunControl::default(), Arc::new(mpfem::parallel::Serial)) {
                         Ok(code) if code == ExitCode::SUCCESS => 0,
                         Ok(_) => 1,
                         Err(e) => {
@@ -631,10 +641,47 @@ fn copy_run_files(from: &Path, to: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `mpirun -n N mpfem run`, ranks 1..N: the same solve on the same model (from the same
+/// checkpoint on a restart), no output (rank 0 writes the results and reports); the stop
+/// after a signal is rank 0's decision, broadcast after every step. The exit code is the run's.
+fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<mpfem::checkpoint::Checkpoint>) -> anyhow::Result<ExitCode> {
+    let model = match Model::from_case(c) {
+        Ok(m) => m,
+        Err(_) => return Ok(ExitCode::from(2)),
+    };
+    let mut sim = match checkpoint {
+        None => Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?,
+        Some(ck) => match ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)) {
+            Ok(s) => s,
+            Err(_) => return Ok(ExitCode::from(2)),
+        },
+    };
+    let result = sim.run_controlled(&mut |_, _| {
+        let mut stop = [0.0];
+        comm.broadcast(&mut stop);
+        if stop[0] != 0.0 {
+            ControlFlow::Break("interrupted on rank 0".into())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    Ok(match result {
+        Ok(s) if s.interrupted => ExitCode::from(3),
+        Ok(_) => ExitCode::SUCCESS,
+        Err(_) => ExitCode::from(1),
+    })
+}
+
 #[allow(clippy::too_many_arguments)]
-fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool, control: &RunControl) -> anyhow::Result<ExitCode> {
+fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, threads: Option<usize>, quiet: bool, plots: bool, control: &RunControl, comm: Arc<dyn Collective>) -> anyhow::Result<ExitCode> {
     if let Some(t) = threads {
         c.solver.threads = t;
+    }
+    if comm.size() > 1 && c.solver.threads == 0 {
+        // "every core" is shared by the ranks of a node
+        let local = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE").or_else(|_| std::env::var("MPI_LOCALNRANKS")).ok().and_then(|v| v.parse::<usize>().ok()).unwrap_or(comm.size());
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        c.solver.threads = (cores / local.max(1)).max(1);
     }
     // the checkpoint to continue from, read before anything is written
     let checkpoint = match &control.restart {
@@ -642,7 +689,9 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         Some(p) => match mpfem::checkpoint::Checkpoint::read(p) {
             Ok(ck) => Some(ck),
             Err(e) => {
-                eprintln!("error: cannot restart: {e}");
+                if comm.is_root() {
+                    eprintln!("error: cannot restart: {e}");
+                }
                 return Ok(ExitCode::from(2));
             }
         },
@@ -651,7 +700,11 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     if let Some(ck) = &checkpoint {
         if ck.case_sha256 != sha {
             let case = case_file.as_ref().map_or_else(|| "the built-in default job".to_string(), |c| format!("the case file {}", c.path));
-            if control.allow_case_change {
+            if !comm.is_root() {
+                if !control.allow_case_change {
+                    return Ok(ExitCode::from(2));
+                }
+            } else if control.allow_case_change {
                 eprintln!("warning: {case} (sha256 {sha}) is not the one the checkpoint {} was written with (sha256 {}); restarting anyway (--allow-case-change)", ck.path.display(), ck.case_sha256);
             } else {
                 eprintln!(
@@ -662,6 +715,9 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
                 return Ok(ExitCode::from(2));
             }
         }
+    }
+    if !comm.is_root() {
+        return run_rank(&c, comm, checkpoint);
     }
     std::fs::create_dir_all(out).with_context(|| format!("cannot create output directory {}", out.display()))?;
     let model = match Model::from_case(&c) {
@@ -677,8 +733,9 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     let n_bodies = model.bodies.len();
     let title = c.title.clone();
     let started = Instant::now();
+    let ranks = comm.size();
     let (mut sim, resumed) = match checkpoint {
-        None => (Simulation::new(model, c.time, c.solver)?, None),
+        None => (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None),
         Some(ck) => {
             let (step, time, path) = (ck.step, ck.time, ck.path.clone());
             let state: CliState = match ck.run_state() {
@@ -692,7 +749,7 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
                 Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
                 _ => PathBuf::from("."),
             };
-            let sim = match ck.restore(model, c.time, c.solver) {
+            let sim = match ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)) {
                 Ok(s) => s,
                 Err(e) => {
                     eprintln!("error: cannot restart: {e}");
@@ -723,8 +780,9 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     };
     // pictures of an earlier run in the same folder would not match the new results
     mpfem::plot::remove_old_plots(out);
+    let on_ranks = if ranks > 1 { format!(", {ranks} MPI ranks (solve on rank 0)") } else { String::new() };
     eprintln!(
-        "mpfem: {label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}, end time {} s",
+        "mpfem: {label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
         sim.n_free(),
         sim.linear_solver_name(),
         c.time.end
@@ -826,6 +884,11 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
             last_note = Instant::now();
         }
         let signal = control.signal.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
+        if comm.size() > 1 {
+            // every rank stops after the same step: rank 0's flag decides (see `run_rank`)
+            let mut stop = [signal as f64];
+            comm.broadcast(&mut stop);
+        }
         let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
         if signal != 0 || due {
             let t0 = Instant::now();

@@ -24,8 +24,10 @@ use crate::element::Volumetric;
 use crate::linalg::{make_solver, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
 use crate::material::{ConstitutiveLaw, TimeIncrement};
 use crate::model::Model;
+use crate::parallel::{Collective, Distribution, Serial};
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
+use std::sync::Arc;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -283,21 +285,38 @@ pub struct Simulation {
     next_dt: f64,
     /// The report of the last converged step of a run (for the jam test and the summary).
     last_report: Option<StepReport>,
+    /// The processes of the run ([`Serial`] for one).
+    comm: Arc<dyn Collective>,
+    /// What this process owns in a run on several processes (None: one process, the serial
+    /// code path), see [`crate::parallel`].
+    par: Option<Distribution>,
 }
 
 impl Simulation {
     /// Build the driver. `threads` = 0 uses every core; 1 assembles sequentially.
     pub fn new(model: Model, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
+        Self::new_with(model, time, spec, Arc::new(Serial))
+    }
+
+    /// As [`Simulation::new`], on the processes of `comm`: every process builds the same
+    /// model and calls this; each assembles the elements of the particles it owns, rank 0
+    /// solves the linear systems (see [`crate::parallel`]). With one process this is
+    /// [`Simulation::new`].
+    pub fn new_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>) -> Result<Self, SolveError> {
+        let par = Distribution::new(&model, comm.clone());
         let n_dofs = model.n_dofs();
         let (eq, n_free) = number_equations(n_dofs, model.prescribed.iter().map(|p| p.dof));
         let mut contact = ContactProblem::new(&model, model.walls.clone(), model.contact.clone());
-        let (assembler, kk) = match contact.as_mut() {
+        let (mut assembler, kk) = match contact.as_mut() {
             Some(c) => {
                 c.select_pairs(&model.x0);
                 Assembler::with_multipliers(&model, eq, n_free, &c.couplings(), &c.multiplier_dofs())
             }
             None => Assembler::new(&model, eq, n_free),
         };
+        if let Some(p) = &par {
+            assembler.retain_elements(&p.owned_elements);
+        }
         // stabilisation springs ζ E a / h² on every dof of a contact problem
         let mut stab_k = vec![0.0; n_dofs];
         if let Some(c) = &contact {
@@ -354,9 +373,13 @@ impl Simulation {
             ordering: spec.ordering,
         };
         let mut linear = make_solver(&opts);
-        if n_free > 0 {
-            linear.analyze(&kk)?;
+        // (rank 0 alone solves; a failure there fails every process)
+        let analyzed = if n_free > 0 && comm.is_root() { linear.analyze(&kk) } else { Ok(()) };
+        if par.is_some() && comm.max(if analyzed.is_err() { 1.0 } else { 0.0 }) > 0.0 {
+            analyzed?;
+            return Err(LinalgError::Other("symbolic analysis failed on rank 0".into()).into());
         }
+        analyzed?;
         let linear_name = linear.name().to_string();
         let ne = model.elements.len();
         let mut kappa = vec![0.0; ne];
@@ -424,6 +447,8 @@ impl Simulation {
             remesh_baseline: Vec::new(),
             next_dt: time.dt.min(time.dt_max),
             last_report: None,
+            comm,
+            par,
         };
         sim.remesh_baseline = vec![None; sim.model.bodies.len()];
         sim.start_dynamics()?;
@@ -624,7 +649,7 @@ impl Simulation {
             moved.state.j0.iter_mut().for_each(|j| *j = 1.0);
         }
         let model = self.model.with_body_mesh(b, new_mesh).map_err(|e| fail(e.to_string()))?;
-        let mut next = Simulation::new(model, self.time, self.spec)?;
+        let mut next = Simulation::new_with(model, self.time, self.spec, self.comm.clone())?;
         // the solution: other bodies renumbered, the re-meshed body from the transfer
         for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
             if c == b {
@@ -1169,9 +1194,12 @@ impl Simulation {
     /// asked) the tangent. Returns ‖r‖.
     fn evaluate(&mut self, u: &[f64], inc: TimeIncrement, vol: &[Volumetric], tangent: bool) -> Result<f64, AssemblyError> {
         let x = self.coords(u);
+        // on several processes the element tangent is summed onto rank 0 right after the
+        // element assembly; the rest (loads, contact, springs, inertia) rank 0 alone adds
+        let root_tangent = tangent && self.comm.is_root();
         let kk = if tangent { Some(&mut self.kk) } else { None };
         let t0 = Instant::now();
-        self.assembler.assemble_j0(
+        let assembled = self.assembler.assemble_j0(
             &self.model,
             u,
             &self.sol.fields.states,
@@ -1183,15 +1211,28 @@ impl Simulation {
             &mut self.f_int,
             &mut self.trial_fields,
             self.pool.as_ref(),
-        )?;
+        );
+        match &self.par {
+            Some(p) => {
+                p.agree(assembled)?;
+                // every dof and every tangent entry of the elements belongs to one body, so only
+                // its owner adds to it: the sums are exact, and rank 0 then adds the rest in the
+                // serial order (the run is bit-identical to the serial one)
+                p.comm.sum_in_place(&mut self.f_int);
+                if tangent {
+                    p.comm.sum_to_root(&mut self.kk.values);
+                }
+            }
+            None => assembled?,
+        }
         self.timing.element_assembly += t0.elapsed().as_secs_f64();
-        self.external_forces(inc.time, &x, tangent);
+        self.external_forces(inc.time, &x, root_tangent);
         // element forces alone: with contact they balance the contact forces, which makes them
         // the force scale of a problem driven by walls (no external force, no reaction)
         self.f_elem_norm = self.f_int.iter().map(|v| v * v).sum::<f64>().sqrt();
         let t1 = Instant::now();
         if let Some(c) = self.contact.as_mut() {
-            let kk = if tangent { Some((&mut self.kk, self.assembler.eq.as_slice(), self.assembler.n_free)) } else { None };
+            let kk = if root_tangent { Some((&mut self.kk, self.assembler.eq.as_slice(), self.assembler.n_free)) } else { None };
             self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk);
             // stabilisation springs (in residual and tangent, dissipate energy) and the
             // tangent-only regularisation (changes the Newton path, not the solution)
@@ -1203,7 +1244,7 @@ impl Simulation {
                 }
                 let q = self.assembler.eq[d];
                 let kt = self.stab_base[d] + kr;
-                if tangent && q != FIXED && kt > 0.0 {
+                if root_tangent && q != FIXED && kt > 0.0 {
                     if let Some(pos) = self.kk.find(q, q) {
                         self.kk.values[pos] += kt;
                     }
@@ -1213,7 +1254,7 @@ impl Simulation {
         self.timing.contact_assembly += t1.elapsed().as_secs_f64();
         // implicit dynamics: inertia (HHT-weighted) in F_int, M/((1+α)βΔt²) on the diagonal
         if let Some(dy) = self.dynamics.as_ref() {
-            dy.add_inertia(u, inc.dt, &self.assembler.eq, &mut self.f_int, tangent.then_some(&mut self.kk));
+            dy.add_inertia(u, inc.dt, &self.assembler.eq, &mut self.f_int, root_tangent.then_some(&mut self.kk));
         }
         if !self.eq_offset.is_empty() {
             for (f, o) in self.f_int.iter_mut().zip(&self.eq_offset) {
@@ -1248,9 +1289,24 @@ impl Simulation {
 
     fn factor(&mut self) -> Result<(), NewtonFailure> {
         let t0 = Instant::now();
-        let r = self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()));
+        let r = if self.comm.is_root() { self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+        let r = self.agree_linear(r, "factorisation");
         self.timing.linear_solve += t0.elapsed().as_secs_f64();
         r
+    }
+
+    /// Solve `kk du = r` (rank 0 solves, the others receive `du`).
+    fn solve_linear(&mut self) -> Result<(), NewtonFailure> {
+        let r = if self.comm.is_root() { self.linear.solve(&self.kk, &self.r, &mut self.du).map(|_| ()).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+        let r = self.agree_linear(r, "linear solve");
+        if r.is_ok() && self.par.is_some() {
+            self.comm.broadcast(&mut self.du);
+        }
+        r
+    }
+
+    fn agree_linear(&self, r: Result<(), NewtonFailure>, what: &str) -> Result<(), NewtonFailure> {
+        agree_linear(self.par.as_ref(), r, what)
     }
 
     /// Contact pairs for a solve that ends at `sol.time + dt` (frozen during its Newton
@@ -1270,8 +1326,12 @@ impl Simulation {
                 self.r.resize(kk.nrows, 0.0);
                 self.du.resize(kk.nrows, 0.0);
                 self.kk = kk;
+                if let Some(p) = &self.par {
+                    self.assembler.retain_elements(&p.owned_elements);
+                }
                 if self.assembler.n_free > 0 {
-                    self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+                    let r = if self.comm.is_root() { self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+                    agree_linear(self.par.as_ref(), r, "symbolic analysis")?;
                 }
             }
             // anchor of the springs: the last converged position, or its extrapolation
@@ -1359,6 +1419,10 @@ impl Simulation {
             };
             first = false;
             iterations += its;
+            // the fields of the other processes' elements (for the updates below and the commit)
+            if let Some(p) = &self.par {
+                p.sync_fields(&mut self.trial_fields);
+            }
             // augmented Lagrangian on the element area of incompressible bodies
             let mut worst: f64 = 0.0;
             for e in 0..self.incompressible.len() {
@@ -1416,7 +1480,7 @@ impl Simulation {
             }
         }
         self.du.iter_mut().for_each(|v| *v = 0.0);
-        self.linear.solve(&self.kk, &self.r, &mut self.du).map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+        self.solve_linear()?;
         for (d, &q) in self.assembler.eq.iter().enumerate() {
             if q != FIXED {
                 u[d] = u_n[d] + self.du[q];
@@ -1464,9 +1528,9 @@ impl Simulation {
             // solve K Δu = R
             self.du.iter_mut().for_each(|v| *v = 0.0);
             let t0 = Instant::now();
-            let solved = self.linear.solve(&self.kk, &self.r, &mut self.du);
+            let solved = self.solve_linear();
             self.timing.linear_solve += t0.elapsed().as_secs_f64();
-            solved.map_err(|e| NewtonFailure::Linear(e.to_string()))?;
+            solved?;
             let energy = self.du.iter().zip(&self.r).map(|(a, b)| a * b).sum::<f64>().abs();
             if k == 0 {
                 e0 = energy.max(f64::MIN_POSITIVE);
@@ -1617,5 +1681,18 @@ impl Simulation {
             kinetic_energy: self.dynamics.as_ref().map_or(0.0, |dy| dy.kinetic_energy()),
             remeshes: 0,
         }
+    }
+}
+
+/// A linear-algebra result of rank 0 (the only one that factors and solves), known to every
+/// process of a run on several processes (`par`); unchanged on one.
+fn agree_linear(par: Option<&Distribution>, r: Result<(), NewtonFailure>, what: &str) -> Result<(), NewtonFailure> {
+    let Some(p) = par else { return r };
+    let mut failed = [if r.is_err() { 1.0 } else { 0.0 }];
+    p.comm.broadcast(&mut failed);
+    match r {
+        Err(e) => Err(e),
+        Ok(()) if failed[0] > 0.0 => Err(NewtonFailure::Linear(format!("{what} failed on rank 0"))),
+        Ok(()) => Ok(()),
     }
 }

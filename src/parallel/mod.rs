@@ -1,0 +1,226 @@
+//! Distributed runs: the collective operations the solver driver needs, behind one small trait,
+//! and the bookkeeping of which process owns which work.
+//!
+//! The model is replicated on every process (each builds the same [`Model`] from the case);
+//! the work is distributed: every process owns whole particles (a METIS partition of the
+//! particle graph, [`crate::distribute::partition_particles`]) and evaluates the element
+//! kernels of its own elements only, into arrays laid out on the same global sparsity pattern
+//! everywhere. The driver ([`crate::solver::Simulation`]) then
+//! - sums the element forces over the processes (every process gets them: residual, norms,
+//!   reactions and energies are then the same on every process, and so are the Newton, line
+//!   search and step decisions),
+//! - sums the element tangent onto process 0, which adds the loads, contact and stabilisation
+//!   terms, factors and solves it (the faer sparse LU / Cholesky of the serial run: the
+//!   gathered reference solver) and broadcasts the update,
+//! - agrees on failures (an inverted element anywhere fails the evaluation everywhere),
+//! - makes the element fields (states, stresses, pressures) of all elements known everywhere
+//!   after each Newton solve (for the augmented-Lagrangian updates, the commit and the output).
+//!
+//! Contact is replicated: every process selects the same pairs and evaluates every contact
+//! kernel (so that the contact histories, statistics and nodal contact fields are the same
+//! everywhere without communication); the contact forces are added on every process after the
+//! element forces are summed, the contact tangent on process 0 only.
+//!
+//! Every element force and element tangent entry belongs to one particle, so one process adds
+//! to it and the sums over the processes add only zeros: they are exact, process 0 then adds
+//! everything else in the serial order, and a run on any number of processes is bit-identical
+//! to the serial run (`tests/mpi_ranks.rs`).
+//!
+//! Physics code (elements, materials, contact kernels) never sees this module; a serial run uses
+//! [`Serial`], whose operations do nothing, and takes exactly the serial code path.
+
+#[cfg(feature = "mpi")]
+pub mod mpi;
+
+use crate::assembly::{AssemblyError, ElementFields};
+use crate::element::N_ENH;
+use crate::material::{MatState, MaterialError};
+use crate::model::Model;
+use std::sync::Arc;
+
+/// The collective operations of a group of processes (MPI ranks), as the solver driver uses
+/// them. Every process must call the same operations in the same order with buffers of the
+/// same length. Rank 0 is the root.
+pub trait Collective: Send + Sync {
+    /// This process's rank (0 ≤ rank < size).
+    fn rank(&self) -> usize;
+    /// Number of processes.
+    fn size(&self) -> usize;
+    /// Whether this is rank 0 (which solves the linear systems and writes the results).
+    fn is_root(&self) -> bool {
+        self.rank() == 0
+    }
+    /// Element-wise sum over the processes; the result on every process.
+    fn sum_in_place(&self, x: &mut [f64]);
+    /// Element-wise sum over the processes; the result on rank 0 only (`x` is unspecified
+    /// on the other ranks afterwards).
+    fn sum_to_root(&self, x: &mut [f64]);
+    /// Rank 0's `x` on every process.
+    fn broadcast(&self, x: &mut [f64]);
+    /// Smallest `x` over the processes, on every process.
+    fn min_u64(&self, x: u64) -> u64;
+    /// Largest `x` over the processes, on every process.
+    fn max(&self, x: f64) -> f64;
+    /// End every process with exit code `code`, for an error one process meets alone (the
+    /// others would wait for it in the next collective operation). Does nothing on one
+    /// process.
+    fn abort_all(&self, _code: i32) {}
+}
+
+/// One process: every operation is the identity.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Serial;
+
+impl Collective for Serial {
+    fn rank(&self) -> usize {
+        0
+    }
+    fn size(&self) -> usize {
+        1
+    }
+    fn sum_in_place(&self, _x: &mut [f64]) {}
+    fn sum_to_root(&self, _x: &mut [f64]) {}
+    fn broadcast(&self, _x: &mut [f64]) {}
+    fn min_u64(&self, x: u64) -> u64 {
+        x
+    }
+    fn max(&self, x: f64) -> f64 {
+        x
+    }
+}
+
+/// The collective of this process: MPI's world when the `mpi` feature is on and the process was
+/// started by an MPI launcher (`mpirun`, `srun`, …), otherwise [`Serial`]. Call it once, early
+/// (MPI initialises once per process); MPI finalises when the last clone of the returned `Arc`
+/// is dropped.
+pub fn launch() -> Arc<dyn Collective> {
+    #[cfg(feature = "mpi")]
+    if let Some(m) = mpi::MpiCollective::init_if_launched() {
+        return Arc::new(m);
+    }
+    Arc::new(Serial)
+}
+
+/// Values per element exchanged by [`Distribution::sync_fields`]: 4 Gauss points × (state: 6,
+/// stress: 4), pressure, Θ and the enhanced modes.
+const FIELD_WIDTH: usize = 4 * 6 + 16 + 2 + N_ENH;
+
+/// Who owns what in a run on several processes (more than one).
+pub struct Distribution {
+    pub comm: Arc<dyn Collective>,
+    /// Owning rank of every body.
+    pub body_owner: Vec<usize>,
+    /// Whether this process evaluates element `e`.
+    pub owned_elements: Vec<bool>,
+    /// Position of every element in the serial assembly order (colour by colour, see
+    /// [`crate::assembly`]): a serial assembly reports the first element that fails in this
+    /// order, and so does [`Distribution::agree`].
+    elem_order: Vec<u64>,
+}
+
+impl Distribution {
+    /// Partition the model's bodies over the processes of `comm` (METIS k-way on the particle
+    /// graph: the same on every process, as the model is). `None` for a single process.
+    pub fn new(model: &Model, comm: Arc<dyn Collective>) -> Option<Self> {
+        let size = comm.size();
+        if size <= 1 {
+            return None;
+        }
+        let body_owner = if model.bodies.len() > 1 { crate::distribute::partition_particles(model, size) } else { vec![0; model.bodies.len()] };
+        let rank = comm.rank();
+        let owned_elements: Vec<bool> = model.elem_body.iter().map(|&b| body_owner[b] == rank).collect();
+        let mut per_rank = vec![(0usize, 0usize); size];
+        for (b, &r) in body_owner.iter().enumerate() {
+            per_rank[r].0 += 1;
+            per_rank[r].1 += model.bodies[b].mesh.n_elements();
+        }
+        if comm.is_root() {
+            tracing::info!(ranks = size, ?per_rank, "bodies and elements per rank");
+        }
+        let mut elem_order = vec![0; model.elements.len()];
+        for (k, &e) in crate::assembly::color_elements(&model.elements, model.n_nodes()).iter().flatten().enumerate() {
+            elem_order[e] = k as u64;
+        }
+        Some(Self { comm, body_owner, owned_elements, elem_order })
+    }
+
+    /// The assembly result of every process, agreed: an element failure on any process fails
+    /// all of them with the same error, that of the element a serial assembly (one thread)
+    /// would report, the first to fail in its order. (Which element failed matters: a run that
+    /// re-meshes re-meshes its particle.)
+    pub fn agree(&self, local: Result<(), AssemblyError>) -> Result<(), AssemblyError> {
+        let order = |e: &AssemblyError| self.elem_order.get(e.element).copied().unwrap_or(u64::MAX - 1);
+        let mine = local.as_ref().err().map_or(u64::MAX, order);
+        let first = self.comm.min_u64(mine);
+        if first == u64::MAX {
+            return Ok(());
+        }
+        // the failing process tells the others what failed (each element has one owner, so
+        // one process fills the buffer in)
+        let mut code = [0.0; 4];
+        if mine == first {
+            if let Err(e) = &local {
+                let [kind, a, b] = match e.source {
+                    MaterialError::InvertedElement(j) => [1.0, j, 0.0],
+                    MaterialError::ReturnMapFailed { iterations, residual } => [2.0, iterations as f64, residual],
+                    MaterialError::InvalidVolumeRatio(j) => [3.0, j, 0.0],
+                };
+                code = [e.element as f64, kind, a, b];
+            }
+        }
+        self.comm.sum_in_place(&mut code);
+        let source = match code[1] as i64 {
+            2 => MaterialError::ReturnMapFailed { iterations: code[2] as usize, residual: code[3] },
+            3 => MaterialError::InvalidVolumeRatio(code[2]),
+            _ => MaterialError::InvertedElement(code[2]),
+        };
+        Err(AssemblyError { element: code[0] as usize, source })
+    }
+
+    /// Make the element fields of every element the owner's, on every process: each process
+    /// fills in its own elements (the others are zero) and the buffers are summed, which adds
+    /// only zeros to every value, so the values arrive exactly.
+    pub fn sync_fields(&self, fields: &mut ElementFields) {
+        let ne = self.owned_elements.len();
+        let mut buf = vec![0.0; ne * FIELD_WIDTH];
+        for (e, chunk) in buf.chunks_exact_mut(FIELD_WIDTH).enumerate() {
+            if !self.owned_elements[e] {
+                continue;
+            }
+            let mut k = 0;
+            let mut put = |v: f64| {
+                chunk[k] = v;
+                k += 1;
+            };
+            for g in 0..4 {
+                let s = &fields.states[e][g];
+                s.cp_inv.iter().for_each(|&v| put(v));
+                put(s.eps_p);
+                put(s.eps_c);
+                fields.sig[e][g].iter().for_each(|&v| put(v));
+            }
+            put(fields.pressure[e]);
+            put(fields.theta[e]);
+            fields.alpha[e].iter().for_each(|&v| put(v));
+        }
+        self.comm.sum_in_place(&mut buf);
+        for (e, chunk) in buf.chunks_exact(FIELD_WIDTH).enumerate() {
+            if self.owned_elements[e] {
+                continue;
+            }
+            let mut it = chunk.iter().copied();
+            let mut get = || it.next().unwrap_or(0.0);
+            for g in 0..4 {
+                let mut s = MatState::default();
+                s.cp_inv.iter_mut().for_each(|v| *v = get());
+                s.eps_p = get();
+                s.eps_c = get();
+                fields.states[e][g] = s;
+                fields.sig[e][g].iter_mut().for_each(|v| *v = get());
+            }
+            fields.pressure[e] = get();
+            fields.theta[e] = get();
+            fields.alpha[e].iter_mut().for_each(|v| *v = get());
+        }
+    }
+}

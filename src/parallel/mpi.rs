@@ -1,0 +1,99 @@
+//! [`Collective`] over MPI (rsmpi), compiled with the `mpi` feature.
+
+use super::Collective;
+use mpi::collective::SystemOperation;
+use mpi::environment::Universe;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+/// MPI's world communicator. Owns the MPI environment: MPI finalises when it is dropped.
+pub struct MpiCollective {
+    // (dropped before the universe: fields drop in declaration order)
+    world: SimpleCommunicator,
+    _universe: Universe,
+    rank: usize,
+    size: usize,
+}
+
+// SAFETY: MPI is initialised with `Threading::Funneled` and the driver calls these operations
+// from the thread that initialised it only (the rayon workers of the assembly never do); the
+// handles are plain integers/pointers owned by the MPI library.
+unsafe impl Send for MpiCollective {}
+unsafe impl Sync for MpiCollective {}
+
+/// Environment variables one of which MPI launchers set in every process they start (Open MPI,
+/// MPICH/Hydra, PMIx, Slurm's PMI).
+const LAUNCHER_VARIABLES: [&str; 5] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS", "PMI_RANK"];
+
+impl MpiCollective {
+    /// Initialise MPI when this process was started by an MPI launcher (a process started
+    /// directly stays serial and never touches MPI). `None` if it was not, or MPI cannot
+    /// start or was started already.
+    pub fn init_if_launched() -> Option<Self> {
+        if !LAUNCHER_VARIABLES.iter().any(|v| std::env::var_os(v).is_some()) {
+            return None;
+        }
+        let (universe, _threading) = mpi::initialize_with_threading(mpi::Threading::Funneled)?;
+        let world = universe.world();
+        let (rank, size) = (world.rank() as usize, world.size() as usize);
+        Some(Self { world, _universe: universe, rank, size })
+    }
+}
+
+impl Collective for MpiCollective {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn size(&self) -> usize {
+        self.size
+    }
+
+    fn sum_in_place(&self, x: &mut [f64]) {
+        if self.size > 1 && !x.is_empty() {
+            let send = x.to_vec();
+            self.world.all_reduce_into(&send[..], x, SystemOperation::sum());
+        }
+    }
+
+    fn sum_to_root(&self, x: &mut [f64]) {
+        if self.size <= 1 || x.is_empty() {
+            return;
+        }
+        let root = self.world.process_at_rank(0);
+        if self.rank == 0 {
+            let send = x.to_vec();
+            root.reduce_into_root(&send[..], x, SystemOperation::sum());
+        } else {
+            root.reduce_into(&x[..], SystemOperation::sum());
+        }
+    }
+
+    fn broadcast(&self, x: &mut [f64]) {
+        if self.size > 1 && !x.is_empty() {
+            self.world.process_at_rank(0).broadcast_into(x);
+        }
+    }
+
+    fn min_u64(&self, x: u64) -> u64 {
+        let mut out = x;
+        if self.size > 1 {
+            self.world.all_reduce_into(&x, &mut out, SystemOperation::min());
+        }
+        out
+    }
+
+    fn abort_all(&self, code: i32) {
+        if self.size > 1 {
+            self.world.abort(code);
+        }
+    }
+
+    fn max(&self, x: f64) -> f64 {
+        let mut out = x;
+        if self.size > 1 {
+            self.world.all_reduce_into(&x, &mut out, SystemOperation::max());
+        }
+        out
+    }
+}
