@@ -102,3 +102,124 @@ fn wall_pressures_on_1_to_4_ranks_match_the_serial_run() {
     }
     let _ = std::fs::remove_dir_all(&serial_dir);
 }
+
+/// Checkpoint and restart across rank counts: a 2-rank run writes a checkpoint every 4 steps;
+/// its checkpoint (at the last multiple of 4 before the end) is continued on 1 rank (no
+/// launcher) and on 3 ranks. Both continued histories equal the uninterrupted serial run's to
+/// the 1e-8 (measured: byte for byte). Then a SIGTERM to `mpirun` during a 2-rank run:
+/// every rank stops after the same step (rank 0 decides and broadcasts), the exit code is 3,
+/// and the checkpoint continues on 2 ranks to the serial history.
+#[test]
+fn checkpoints_move_between_rank_counts() {
+    let dir = tmpdir("ckpt");
+    let case = dir.join("case.toml");
+    let text = std::fs::read_to_string(CASE).expect("case");
+    std::fs::write(&case, text.replace("[output]\nevery = 0", "[output]\nevery = 0\ncheckpoint_every = 4\ncheckpoint_minutes = 0")).expect("write case");
+    assert!(std::fs::read_to_string(&case).unwrap().contains("checkpoint_every = 4"), "the case's [output] table moved");
+    let run_case = |ranks: Option<usize>, out: &Path, extra: &[&str]| -> std::process::Output {
+        let exe = env!("CARGO_BIN_EXE_mpfem");
+        let mut cmd = match ranks {
+            None => Command::new(exe),
+            Some(n) => {
+                let mut c = Command::new("mpirun");
+                c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
+                c.args(["--oversubscribe", "--bind-to", "none", "-n", &n.to_string(), exe]);
+                c
+            }
+        };
+        cmd.arg("run").arg(&case).arg("--out").arg(out).args(["--quiet", "--no-plots", "--threads", "1"]).args(extra);
+        cmd.output().expect("start")
+    };
+    let serial = dir.join("serial");
+    let o = run_case(None, &serial, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let expected = std::fs::read_to_string(serial.join("history.csv")).unwrap();
+    let steps = expected.lines().count() - 1;
+    assert!(steps > 4, "the case has only {steps} steps");
+
+    let two = dir.join("two");
+    let o = run_case(Some(2), &two, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (ranks, name) in [(None, "one"), (Some(3), "three")] {
+        let out = dir.join(name);
+        std::fs::create_dir_all(&out).unwrap();
+        for f in ["history.csv", "checkpoint.h5"] {
+            std::fs::copy(two.join(f), out.join(f)).unwrap();
+        }
+        let o = run_case(ranks, &out, &["--restart", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{ranks:?} ranks after the restart: {err}");
+        assert!(err.contains("restarting from"), "{err}");
+        let got = std::fs::read_to_string(out.join("history.csv")).unwrap();
+        let (h, rows) = read_history(&out);
+        let (_, want) = read_history(&serial);
+        assert_eq!(rows.len(), want.len(), "{ranks:?} ranks: rows");
+        for name in COMPARED {
+            let c = h.iter().position(|x| x == name).unwrap();
+            let scale = want.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+            for (a, b) in rows.iter().zip(&want) {
+                assert!((a[c] - b[c]).abs() <= TOL * scale, "{ranks:?} ranks after a 2-rank checkpoint: {name} {} vs {}", a[c], b[c]);
+            }
+        }
+        println!("restart of a 2-rank checkpoint on {ranks:?} ranks: history.csv byte-identical to the serial run: {}", got == expected);
+    }
+
+    // SIGTERM to mpirun in the middle of a 2-rank run
+    let term = dir.join("term");
+    std::fs::create_dir_all(&term).unwrap();
+    let slow = dir.join("slow.toml");
+    // smaller steps, so that the signal comes in the middle of the run
+    std::fs::write(&slow, std::fs::read_to_string(&case).unwrap().replace("dt_max = 0.1", "dt_max = 0.01").replace("dt = 0.05", "dt = 0.01").replace("checkpoint_every = 4", "checkpoint_every = 0")).unwrap();
+    let slow_serial = dir.join("slow_serial");
+    let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("run").arg(&slow).arg("--out").arg(&slow_serial).args(["--quiet", "--no-plots", "--threads", "1"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut child = Command::new("mpirun")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_plm", "isolated")
+        .args(["--oversubscribe", "--bind-to", "none", "-n", "2", env!("CARGO_BIN_EXE_mpfem"), "run"])
+        .arg(&slow)
+        .arg("--out")
+        .arg(&term)
+        .args(["--quiet", "--no-plots", "--threads", "1"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    loop {
+        let rows = std::fs::read_to_string(term.join("history.csv")).map_or(0, |t| t.lines().count().saturating_sub(1));
+        if rows >= 3 {
+            break;
+        }
+        assert!(child.try_wait().unwrap().is_none(), "the 2-rank run ended before the signal");
+        assert!(t0.elapsed() < std::time::Duration::from_secs(120), "no history rows after 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: sending a signal to our own child process (mpirun, which passes it to the ranks)
+    assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) }, 0);
+    let status = child.wait().unwrap();
+    assert!(term.join("checkpoint.h5").is_file(), "no checkpoint after SIGTERM (exit {status:?})");
+    let rows = std::fs::read_to_string(term.join("history.csv")).unwrap().lines().count() - 1;
+    let all = std::fs::read_to_string(slow_serial.join("history.csv")).unwrap().lines().count() - 1;
+    assert!(rows < all, "the run was not interrupted ({rows} of {all} steps, exit {status:?})");
+    println!("SIGTERM to mpirun: exit {status:?} after {rows} of {all} steps");
+    let o = Command::new("mpirun")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_plm", "isolated")
+        .args(["--oversubscribe", "--bind-to", "none", "-n", "2", env!("CARGO_BIN_EXE_mpfem"), "run"])
+        .arg(&slow)
+        .arg("--out")
+        .arg(&term)
+        .args(["--quiet", "--no-plots", "--threads", "1", "--restart"])
+        .arg(&term)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "2-rank restart: {}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(term.join("history.csv")).unwrap(),
+        std::fs::read_to_string(slow_serial.join("history.csv")).unwrap(),
+        "the 2-rank run continued after SIGTERM differs from the serial run"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -39,7 +39,9 @@ while kill -0 "$pid" 2>/dev/null; do
   code=$?
 done
 
-if [ "$code" -eq 3 ]; then
+# exit code 3: stopped with a checkpoint (a launcher may report another non-zero code for
+# it, e.g. Open MPI's mpirun after a forwarded SIGTERM: summary.json then says "interrupted")
+if [ "$code" -eq 3 ] || { [ "$code" -ne 0 ] && grep -q '"status": *"interrupted"' "$OUT/summary.json" 2>/dev/null; }; then
   echo "pbs: stopped with a checkpoint, asking for a rerun of ${PBS_JOBID:-?}"
   "${requeue[@]}" "${PBS_JOBID:-0}"
 fi
