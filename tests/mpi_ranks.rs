@@ -40,21 +40,23 @@ fn read_history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     (header, rows)
 }
 
+/// `mpirun -n ranks mpfem` (the mpfem arguments follow): as root (CI containers) Open MPI
+/// wants both variables; the "isolated" launcher starts local ranks without ssh (which a
+/// container may lack: Open MPI's default launcher then refuses to start); more ranks than
+/// cores need --oversubscribe; one thread per rank, not bound to a core.
+fn mpirun(ranks: usize) -> Command {
+    let mut c = Command::new("mpirun");
+    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
+    c.args(["--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string(), env!("CARGO_BIN_EXE_mpfem")]);
+    c
+}
+
 /// `mpfem run CASE --out DIR` (serial, no launcher) or under `mpirun -n ranks`.
 fn run(ranks: Option<usize>, out: &Path) {
     let exe = env!("CARGO_BIN_EXE_mpfem");
     let mut cmd = match ranks {
         None => Command::new(exe),
-        Some(n) => {
-            let mut c = Command::new("mpirun");
-            // as root (CI containers) Open MPI wants both variables; the "isolated" launcher
-            // starts local ranks without ssh (which a container may lack: Open MPI's default
-            // launcher then refuses to start); more ranks than cores need --oversubscribe;
-            // one thread per rank, not bound to a core
-            c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
-            c.args(["--oversubscribe", "--bind-to", "none", "-n", &n.to_string(), exe]);
-            c
-        }
+        Some(n) => mpirun(n),
     };
     cmd.args(["run", CASE, "--out"]).arg(out).args(["--quiet", "--no-plots", "--threads", "1"]);
     let o = cmd.output().unwrap_or_else(|e| panic!("cannot start {:?} (is Open MPI's mpirun installed? bash scripts/setup.sh): {e}", cmd.get_program()));
@@ -120,12 +122,7 @@ fn checkpoints_move_between_rank_counts() {
         let exe = env!("CARGO_BIN_EXE_mpfem");
         let mut cmd = match ranks {
             None => Command::new(exe),
-            Some(n) => {
-                let mut c = Command::new("mpirun");
-                c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
-                c.args(["--oversubscribe", "--bind-to", "none", "-n", &n.to_string(), exe]);
-                c
-            }
+            Some(n) => mpirun(n),
         };
         cmd.arg("run").arg(&case).arg("--out").arg(out).args(["--quiet", "--no-plots", "--threads", "1"]).args(extra);
         cmd.output().expect("start")
@@ -173,11 +170,8 @@ fn checkpoints_move_between_rank_counts() {
     let slow_serial = dir.join("slow_serial");
     let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("run").arg(&slow).arg("--out").arg(&slow_serial).args(["--quiet", "--no-plots", "--threads", "1"]).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let mut child = Command::new("mpirun")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_plm", "isolated")
-        .args(["--oversubscribe", "--bind-to", "none", "-n", "2", env!("CARGO_BIN_EXE_mpfem"), "run"])
+    let mut child = mpirun(2)
+        .arg("run")
         .arg(&slow)
         .arg("--out")
         .arg(&term)
@@ -203,11 +197,8 @@ fn checkpoints_move_between_rank_counts() {
     let all = std::fs::read_to_string(slow_serial.join("history.csv")).unwrap().lines().count() - 1;
     assert!(rows < all, "the run was not interrupted ({rows} of {all} steps, exit {status:?})");
     println!("SIGTERM to mpirun: exit {status:?} after {rows} of {all} steps");
-    let o = Command::new("mpirun")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_plm", "isolated")
-        .args(["--oversubscribe", "--bind-to", "none", "-n", "2", env!("CARGO_BIN_EXE_mpfem"), "run"])
+    let o = mpirun(2)
+        .arg("run")
         .arg(&slow)
         .arg("--out")
         .arg(&term)
