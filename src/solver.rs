@@ -874,12 +874,8 @@ impl Simulation {
         let u0 = self.sol.u.clone();
         let vol = self.volumetric(&self.sol.lambda.clone());
         self.eq_offset.clear();
-        self.evaluate(&u0, inc, &vol, false)?;
+        let rel0 = self.evaluate(&u0, inc, &vol, false)? / self.reference_force();
         let r0: Vec<f64> = self.f_ext.iter().zip(&self.f_int).map(|(e, i)| e - i).collect();
-        let rel0 = {
-            let norm = self.r[..self.assembler.n_free].iter().map(|v| v * v).sum::<f64>().sqrt();
-            norm / self.reference_force()
-        };
         if rel0 <= 10.0 * self.spec.residual_tol {
             // nearly balanced already: one solve
             return self.solve_from(u0, inc, false);
