@@ -3099,8 +3099,9 @@ impl Cx<'_> {
             };
         }
         if let Some(v) = &r.preconditioner {
-            s.preconditioner = match self.choice("solver.preconditioner", v, &["ic0", "jacobi"])? {
+            s.preconditioner = match self.choice("solver.preconditioner", v, &["ic0", "jacobi", "schwarz"])? {
                 "ic0" => Preconditioner::Ic0,
+                "schwarz" => Preconditioner::Schwarz,
                 _ => Preconditioner::Jacobi,
             };
         }

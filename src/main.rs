@@ -780,7 +780,11 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     };
     // pictures of an earlier run in the same folder would not match the new results
     mpfem::plot::remove_old_plots(out);
-    let on_ranks = if ranks > 1 { format!(", {ranks} MPI ranks (solve on rank 0)") } else { String::new() };
+    let on_ranks = match ranks {
+        1 => String::new(),
+        _ if sim.solves_distributed() => format!(", {ranks} MPI ranks (solve distributed)"),
+        _ => format!(", {ranks} MPI ranks (solve on rank 0)"),
+    };
     eprintln!(
         "mpfem: {label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
         sim.n_free(),

@@ -21,7 +21,7 @@ use crate::contact::driver::{wall_position, ContactProblem, ContactStats};
 use crate::case::{LinearChoice, LoadKind, NewtonKind, SolverSpec, TimeSpec};
 use crate::dynamics::Dynamics;
 use crate::element::Volumetric;
-use crate::linalg::{make_solver, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
+use crate::linalg::{make_solver_with, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
 use crate::material::{ConstitutiveLaw, TimeIncrement};
 use crate::model::Model;
 use crate::parallel::{Collective, Distribution, Serial};
@@ -149,6 +149,11 @@ pub struct Timing {
     /// The re-equilibrations after re-meshes (already counted in the assembly and solve
     /// phases).
     pub reequilibration: f64,
+    /// Linear solves, and the iterations they took (1 per solve for the direct solvers).
+    #[serde(default)]
+    pub linear_solves: usize,
+    #[serde(default)]
+    pub linear_iterations: usize,
 }
 
 /// The converged solution at the end of the last committed step.
@@ -290,6 +295,9 @@ pub struct Simulation {
     /// What this process owns in a run on several processes (None: one process, the serial
     /// code path), see [`crate::parallel`].
     par: Option<Distribution>,
+    /// Whether every process takes part in the linear solves (the Schwarz PCG on several
+    /// processes); otherwise rank 0 solves and broadcasts the update.
+    distributed_solve: bool,
 }
 
 impl Simulation {
@@ -371,10 +379,23 @@ impl Simulation {
             pcg_max_iterations: spec.pcg_max_iterations,
             threads,
             ordering: spec.ordering,
+            symmetric: model.symmetric_tangent(),
         };
-        let mut linear = make_solver(&opts);
-        // (rank 0 alone solves; a failure there fails every process)
-        let analyzed = if n_free > 0 && comm.is_root() { linear.analyze(&kk) } else { Ok(()) };
+        // the particles are the subdomains of the Schwarz preconditioner, distributed like the
+        // elements; with it every process takes part in the solve, otherwise rank 0 alone solves
+        let distributed_solve = par.is_some() && kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
+        let mut subdomains = crate::linalg::schwarz::Subdomains::default();
+        if kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz {
+            let ranges: Vec<_> = model.bodies.iter().map(|b| b.node_offset..b.node_offset + b.mesh.nodes.len()).collect();
+            let eq = &assembler.eq;
+            subdomains = crate::linalg::schwarz::Subdomains::from_particles(&ranges, &model.x0, |d| (eq[d] != FIXED).then_some(eq[d]));
+            if let Some(p) = &par {
+                subdomains = subdomains.with_owners(&p.body_owner, comm.rank());
+            }
+        }
+        let mut linear = make_solver_with(&opts, subdomains, comm.clone());
+        // (a failure on the solving process fails every process)
+        let analyzed = if n_free > 0 && (comm.is_root() || distributed_solve) { linear.analyze(&kk) } else { Ok(()) };
         if par.is_some() && comm.max(if analyzed.is_err() { 1.0 } else { 0.0 }) > 0.0 {
             analyzed?;
             return Err(LinalgError::Other("symbolic analysis failed on rank 0".into()).into());
@@ -449,6 +470,7 @@ impl Simulation {
             last_report: None,
             comm,
             par,
+            distributed_solve,
         };
         sim.remesh_baseline = vec![None; sim.model.bodies.len()];
         sim.start_dynamics()?;
@@ -927,6 +949,12 @@ impl Simulation {
         unreachable!("the loop returns at s = 1")
     }
 
+    /// Whether every process takes part in the linear solves (the Schwarz PCG on several
+    /// processes) rather than rank 0 alone.
+    pub fn solves_distributed(&self) -> bool {
+        self.distributed_solve
+    }
+
     pub fn linear_solver_name(&self) -> &str {
         &self.linear_name
     }
@@ -1283,9 +1311,20 @@ impl Simulation {
         n(&self.f_ext).max(n(&self.f_int)).max(self.f_elem_norm).max(self.force_floor)
     }
 
+    /// Whether this process takes part in the linear solves (rank 0, or every process with
+    /// the distributed Schwarz PCG).
+    fn solves_here(&self) -> bool {
+        self.comm.is_root() || self.distributed_solve
+    }
+
     fn factor(&mut self) -> Result<(), NewtonFailure> {
         let t0 = Instant::now();
-        let r = if self.comm.is_root() { self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+        if self.distributed_solve {
+            // rank 0 holds the whole tangent (elements summed, contact added): every process
+            // needs the rows of its particles
+            self.comm.broadcast(&mut self.kk.values);
+        }
+        let r = if self.solves_here() { self.linear.factor(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
         let r = self.agree_linear(r, "factorisation");
         self.timing.linear_solve += t0.elapsed().as_secs_f64();
         r
@@ -1293,9 +1332,21 @@ impl Simulation {
 
     /// Solve `kk du = r` (rank 0 solves, the others receive `du`).
     fn solve_linear(&mut self) -> Result<(), NewtonFailure> {
-        let r = if self.comm.is_root() { self.linear.solve(&self.kk, &self.r, &mut self.du).map(|_| ()).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+        let r = if self.solves_here() {
+            match self.linear.solve(&self.kk, &self.r, &mut self.du) {
+                Ok(st) => {
+                    self.timing.linear_solves += 1;
+                    self.timing.linear_iterations += st.iterations;
+                    Ok(())
+                }
+                Err(e) => Err(NewtonFailure::Linear(e.to_string())),
+            }
+        } else {
+            Ok(())
+        };
         let r = self.agree_linear(r, "linear solve");
-        if r.is_ok() && self.par.is_some() {
+        // (the distributed solve leaves the same update on every process)
+        if r.is_ok() && self.par.is_some() && !self.distributed_solve {
             self.comm.broadcast(&mut self.du);
         }
         r
@@ -1326,7 +1377,7 @@ impl Simulation {
                     self.assembler.retain_elements(&p.owned_elements);
                 }
                 if self.assembler.n_free > 0 {
-                    let r = if self.comm.is_root() { self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+                    let r = if self.comm.is_root() || self.distributed_solve { self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
                     agree_linear(self.par.as_ref(), r, "symbolic analysis")?;
                 }
             }

@@ -9,6 +9,7 @@
 pub mod csr;
 pub mod direct;
 pub mod pcg;
+pub mod schwarz;
 
 pub use csr::CsrMatrix;
 pub use direct::FillOrdering;
@@ -36,13 +37,17 @@ pub enum Preconditioner {
     Jacobi,
     /// Incomplete Cholesky with zero fill, IC(0), on the matrix pattern.
     Ic0,
+    /// Two-level additive Schwarz: one exactly factorised block per particle plus a coarse
+    /// space of the particles' rigid-body modes ([`schwarz::SchwarzPcg`]). Without particles
+    /// (a bare matrix, [`make_solver`]) it reduces to Jacobi.
+    Schwarz,
 }
 
 #[derive(Debug, Error)]
 pub enum LinalgError {
     #[error("matrix is singular or not factorizable ({0})")]
     Singular(String),
-    #[error("PCG did not converge: relative residual {residual:.3e} after {iterations} iterations (tolerance {tol:.1e})")]
+    #[error("the iterative solver did not converge: relative residual {residual:.3e} after {iterations} iterations (tolerance {tol:.1e})")]
     NotConverged { iterations: usize, residual: f64, tol: f64 },
     #[error("solver used before `analyze` was called for this pattern")]
     NotAnalyzed,
@@ -62,6 +67,9 @@ pub struct SolverOptions {
     pub threads: usize,
     /// Fill-reducing ordering of the sparse Cholesky factorisation (LU always uses COLAMD).
     pub ordering: direct::FillOrdering,
+    /// Whether the matrices will be symmetric (the Schwarz preconditioner then runs CG,
+    /// otherwise GMRES).
+    pub symmetric: bool,
 }
 
 impl Default for SolverOptions {
@@ -73,6 +81,7 @@ impl Default for SolverOptions {
             pcg_max_iterations: 10_000,
             threads: 1,
             ordering: direct::FillOrdering::Amd,
+            symmetric: true,
         }
     }
 }
@@ -99,7 +108,22 @@ pub struct SolveStats {
 
 /// Build the solver chosen in the options.
 pub fn make_solver(opts: &SolverOptions) -> Box<dyn LinearSolver> {
+    make_solver_with(opts, schwarz::Subdomains::default(), std::sync::Arc::new(crate::parallel::Serial))
+}
+
+/// Build the solver chosen in the options, with the particles as the subdomains of the
+/// Schwarz preconditioner and the processes it is distributed over (only
+/// [`Preconditioner::Schwarz`] uses either).
+pub fn make_solver_with(
+    opts: &SolverOptions,
+    subdomains: schwarz::Subdomains,
+    comm: std::sync::Arc<dyn crate::parallel::Collective>,
+) -> Box<dyn LinearSolver> {
     match opts.kind {
+        LinearSolverKind::Pcg if opts.preconditioner == Preconditioner::Schwarz => {
+            let s = schwarz::SchwarzPcg::new(subdomains, comm, opts.pcg_tol, opts.pcg_max_iterations, opts.threads);
+            Box::new(if opts.symmetric { s } else { s.unsymmetric() })
+        }
         LinearSolverKind::Lu => Box::new(direct::FaerLu::new(opts.threads)),
         LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(opts.threads).with_ordering(opts.ordering)),
         LinearSolverKind::Pcg => Box::new(pcg::Pcg::new(

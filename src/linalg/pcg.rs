@@ -145,7 +145,7 @@ impl Pcg {
         z: &mut [f64],
     ) {
         match preconditioner {
-            Preconditioner::Jacobi => {
+            Preconditioner::Jacobi | Preconditioner::Schwarz => {
                 for ((zi, ri), di) in z.iter_mut().zip(r).zip(inv_diag) {
                     *zi = ri * di;
                 }
@@ -210,7 +210,7 @@ impl LinearSolver for Pcg {
         self.l_val.clear();
         self.marker.clear();
         match self.preconditioner {
-            Preconditioner::Jacobi => self.inv_diag.resize(n, 0.0),
+            Preconditioner::Jacobi | Preconditioner::Schwarz => self.inv_diag.resize(n, 0.0),
             Preconditioner::Ic0 => {
                 // Lower triangle of each row: sorted columns up to and including the diagonal.
                 self.l_row_ptr.reserve(n + 1);
@@ -250,7 +250,7 @@ impl LinearSolver for Pcg {
             }
         }
         match self.preconditioner {
-            Preconditioner::Jacobi => {
+            Preconditioner::Jacobi | Preconditioner::Schwarz => {
                 for (inv, &k) in self.inv_diag.iter_mut().zip(&self.diag_pos) {
                     *inv = 1.0 / a.values[k];
                 }
