@@ -273,3 +273,36 @@ fn schwarz_pcg_on_2_to_4_ranks_matches_the_serial_runs() {
     let _ = std::fs::remove_dir_all(&base);
     let _ = std::fs::remove_dir_all(&chol_dir);
 }
+
+/// The scaling study runs from its one command (`jobs/scaling/study.sh`, here its QUICK smoke
+/// size: 4 × 4 discs strong, 2 discs a rank weak, 1 and 2 ranks, both solvers) with this
+/// build's binary, and writes its table and both plots; every run completed.
+#[test]
+fn the_scaling_study_runs_from_one_command() {
+    let out = tmpdir("scaling");
+    let o = Command::new("bash")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/jobs/scaling/study.sh"))
+        .arg(&out)
+        .env("MPFEM", env!("CARGO_BIN_EXE_mpfem"))
+        .env("QUICK", "1")
+        .env("RANKS", "1 2")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_plm", "isolated")
+        .output()
+        .expect("bash");
+    assert!(o.status.success(), "study.sh: {:?}\nstdout: {}\nstderr: {}", o.status, String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("scaling.csv")).expect("scaling.csv");
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    // 2 studies × 2 solvers × 2 rank counts
+    assert_eq!(rows.len(), 8, "scaling.csv:\n{csv}");
+    for solver in ["cholesky", "pcg-schwarz"] {
+        assert!(rows.iter().any(|r| r.contains(solver)), "no {solver} rows:\n{csv}");
+    }
+    assert!(rows.iter().all(|r| r.contains("completed")), "a run did not complete:\n{csv}");
+    for svg in ["speedup.svg", "efficiency.svg"] {
+        let text = std::fs::read_to_string(out.join(svg)).unwrap_or_else(|e| panic!("{svg}: {e}"));
+        assert!(text.starts_with("<svg") && text.contains("polyline"), "{svg} has no curves");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
