@@ -647,10 +647,12 @@ impl LinearSolver for SchwarzPcg {
                 if self.distributed() {
                     self.comm.broadcast(x);
                 }
+                // (the iterations spent before giving up count too)
+                let spent = cg_iterations + if let LinalgError::NotConverged { iterations, .. } = e { iterations } else { 0 };
                 match direct {
                     Err(e) => Err(e),
                     Ok(_) if failed => Err(LinalgError::Singular("the direct solve after a Schwarz PCG breakdown failed on rank 0".into())),
-                    Ok(st) => Ok(st),
+                    Ok(st) => Ok(SolveStats { iterations: st.iterations + spent, ..st }),
                 }
             }
             other => other,
