@@ -179,6 +179,93 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// The product with the matrix and the preconditioner, as [`cg`] uses them.
+pub(crate) trait CgOperator {
+    /// y = A x
+    fn mul(&mut self, x: &[f64], y: &mut [f64]);
+    /// z = M⁻¹ r
+    fn precondition(&mut self, r: &[f64], z: &mut [f64]) -> Result<(), LinalgError>;
+}
+
+/// Preconditioned conjugate gradients on `A x = b` from the initial guess in `x` (`bnorm` =
+/// ‖b‖ > 0), with the work vectors `[r, z, p, ap]`. When the recursive residual reaches `tol`
+/// the true one is computed; if it misses, the iteration restarts from it. A breakdown (pᵀAp ≤
+/// 0 or rᵀM⁻¹r ≤ 0: the matrix or the preconditioner is not positive definite) is
+/// [`LinalgError::Singular`], with its iteration in `broke_at`; running out of iterations is
+/// [`LinalgError::NotConverged`] with the true residual of the last iterate.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cg(
+    op: &mut dyn CgOperator,
+    b: &[f64],
+    bnorm: f64,
+    x: &mut [f64],
+    tol: f64,
+    max_iterations: usize,
+    [r, z, p, ap]: [&mut [f64]; 4],
+    broke_at: &mut usize,
+) -> Result<SolveStats, LinalgError> {
+    let n = b.len();
+    let true_residual = |op: &mut dyn CgOperator, x: &[f64], r: &mut [f64], ap: &mut [f64]| {
+        op.mul(x, ap);
+        for i in 0..n {
+            r[i] = b[i] - ap[i];
+        }
+        dot(r, r).sqrt() / bnorm
+    };
+    let mut rel = true_residual(op, x, r, ap);
+    if rel <= tol {
+        return Ok(SolveStats { iterations: 0, relative_residual: rel });
+    }
+    op.precondition(r, z)?;
+    p.copy_from_slice(z);
+    let mut rz = dot(r, z);
+    let mut it = 0;
+    while it < max_iterations {
+        it += 1;
+        op.mul(p, ap);
+        let pap = dot(p, ap);
+        if !pap.is_finite() || pap <= 0.0 {
+            *broke_at = it;
+            return Err(LinalgError::Singular(format!("PCG breakdown at iteration {it}: pᵀAp = {pap:e} (matrix not positive definite)")));
+        }
+        let alpha = rz / pap;
+        let mut rr = 0.0;
+        for i in 0..n {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * ap[i];
+            rr += r[i] * r[i];
+        }
+        rel = rr.sqrt() / bnorm;
+        if rel <= tol {
+            // confirm with the true residual (the recursive one drifts in floating point); if it
+            // does not hold, restart from the true residual
+            rel = true_residual(op, x, r, ap);
+            if rel <= tol {
+                return Ok(SolveStats { iterations: it, relative_residual: rel });
+            }
+            op.precondition(r, z)?;
+            p.copy_from_slice(z);
+            rz = dot(r, z);
+            continue;
+        }
+        op.precondition(r, z)?;
+        let rz_new = dot(r, z);
+        if !rz_new.is_finite() || rz_new <= 0.0 {
+            *broke_at = it;
+            return Err(LinalgError::Singular(format!(
+                "PCG breakdown at iteration {it}: rᵀM⁻¹r = {rz_new:e} (preconditioner not positive definite)"
+            )));
+        }
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            p[i] = z[i] + beta * p[i];
+        }
+    }
+    rel = true_residual(op, x, r, ap);
+    Err(LinalgError::NotConverged { iterations: it, residual: rel, tol })
+}
+
 impl LinearSolver for Pcg {
     fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
         if self.analyses > 0 && self.stamp.matches(a) {
@@ -307,64 +394,27 @@ impl LinearSolver for Pcg {
         if !x.iter().all(|v| v.is_finite()) {
             x.fill(0.0);
         }
-        let tol = self.tol;
-        let pre = self.preconditioner;
-        let Self { inv_diag, l_row_ptr, l_col, l_val, r, z, p, ap, .. } = self;
-        let apply = |r: &[f64], z: &mut [f64]| Pcg::apply_preconditioner(pre, inv_diag, l_row_ptr, l_col, l_val, r, z);
-
-        let mut rel = a.residual_into(x, b, r) / bnorm;
-        if rel <= tol {
-            return Ok(SolveStats { iterations: 0, relative_residual: rel });
+        struct Op<'a> {
+            a: &'a CsrMatrix,
+            pre: Preconditioner,
+            inv_diag: &'a [f64],
+            l_row_ptr: &'a [usize],
+            l_col: &'a [usize],
+            l_val: &'a [f64],
         }
-        apply(r, z);
-        p.copy_from_slice(z);
-        let mut rz = dot(r, z);
-        let mut it = 0;
-        while it < self.max_iterations {
-            it += 1;
-            a.mul_vec(p, ap);
-            let pap = dot(p, ap);
-            if !pap.is_finite() || pap <= 0.0 {
-                return Err(LinalgError::Singular(format!(
-                    "PCG breakdown at iteration {it}: pᵀAp = {pap:e} (matrix not positive definite)"
-                )));
+        impl CgOperator for Op<'_> {
+            fn mul(&mut self, x: &[f64], y: &mut [f64]) {
+                self.a.mul_vec(x, y);
             }
-            let alpha = rz / pap;
-            let mut rr = 0.0;
-            for i in 0..n {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-                rr += r[i] * r[i];
-            }
-            rel = rr.sqrt() / bnorm;
-            if rel <= tol {
-                // Confirm with the true residual (the recursive one drifts in floating point);
-                // if it does not hold, restart from the true residual.
-                rel = a.residual_into(x, b, r) / bnorm;
-                if rel <= tol {
-                    return Ok(SolveStats { iterations: it, relative_residual: rel });
-                }
-                apply(r, z);
-                p.copy_from_slice(z);
-                rz = dot(r, z);
-                continue;
-            }
-            apply(r, z);
-            let rz_new = dot(r, z);
-            if !rz_new.is_finite() || rz_new <= 0.0 {
-                return Err(LinalgError::Singular(format!(
-                    "PCG breakdown at iteration {it}: rᵀM⁻¹r = {rz_new:e} (preconditioner not positive definite)"
-                )));
-            }
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for i in 0..n {
-                p[i] = z[i] + beta * p[i];
+            fn precondition(&mut self, r: &[f64], z: &mut [f64]) -> Result<(), LinalgError> {
+                Pcg::apply_preconditioner(self.pre, self.inv_diag, self.l_row_ptr, self.l_col, self.l_val, r, z);
+                Ok(())
             }
         }
-        // Report the true residual of the returned iterate.
-        rel = a.residual_into(x, b, r) / bnorm;
-        Err(LinalgError::NotConverged { iterations: it, residual: rel, tol })
+        let (tol, max_iterations) = (self.tol, self.max_iterations);
+        let Self { preconditioner, inv_diag, l_row_ptr, l_col, l_val, r, z, p, ap, .. } = self;
+        let mut op = Op { a, pre: *preconditioner, inv_diag, l_row_ptr, l_col, l_val };
+        cg(&mut op, b, bnorm, x, tol, max_iterations, [r, z, p, ap], &mut 0)
     }
 
     fn name(&self) -> &'static str {

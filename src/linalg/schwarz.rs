@@ -153,7 +153,6 @@ pub struct SchwarzPcg {
     fallbacks: usize,
     /// CG when the matrix is symmetric; GMRES otherwise (and after a CG breakdown).
     symmetric: bool,
-    last_cg_iterations: usize,
     gmres_solves: usize,
     /// GMRES: restart length and the Krylov basis.
     restart: usize,
@@ -224,7 +223,6 @@ impl SchwarzPcg {
             fallback_factored: false,
             fallbacks: 0,
             symmetric: true,
-            last_cg_iterations: 0,
             gmres_solves: 0,
             restart: 60,
             basis: Vec::new(),
@@ -330,6 +328,21 @@ impl SchwarzPcg {
         }
     }
 }
+/// The solver seen by the shared CG iteration ([`super::pcg::cg`]).
+struct Op<'s, 'a> {
+    s: &'s mut SchwarzPcg,
+    a: &'a CsrMatrix,
+}
+
+impl super::pcg::CgOperator for Op<'_, '_> {
+    fn mul(&mut self, x: &[f64], y: &mut [f64]) {
+        self.s.mul(self.a, x, y);
+    }
+    fn precondition(&mut self, r: &[f64], z: &mut [f64]) -> Result<(), LinalgError> {
+        self.s.apply(r, z)
+    }
+}
+
 impl LinearSolver for SchwarzPcg {
     fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
         if self.analyses > 0 && self.stamp.matches(a) {
@@ -618,12 +631,13 @@ impl LinearSolver for SchwarzPcg {
         let mut cg_iterations = 0;
         let mut result = Err(LinalgError::Singular("not symmetric: GMRES".into()));
         if self.symmetric {
-            result = self.iterate(a, b, bnorm, x, &mut r, &mut z, &mut p, &mut ap);
+            let (tol, max_iterations) = (self.tol, self.max_iterations);
+            let mut op = Op { s: self, a };
+            result = super::pcg::cg(&mut op, b, bnorm, x, tol, max_iterations, [&mut r, &mut z, &mut p, &mut ap], &mut cg_iterations);
             if let Err(LinalgError::Singular(reason)) = &result {
                 if self.comm.is_root() {
                     tracing::debug!(%reason, "Schwarz CG broke down; GMRES takes over");
                 }
-                cg_iterations = self.last_cg_iterations;
             }
         }
         if let Err(LinalgError::Singular(_)) = &result {
@@ -738,73 +752,6 @@ impl SchwarzPcg {
             }
         }
         Ok(())
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn iterate(
-        &mut self,
-        a: &CsrMatrix,
-        b: &[f64],
-        bnorm: f64,
-        x: &mut [f64],
-        r: &mut [f64],
-        z: &mut [f64],
-        p: &mut [f64],
-        ap: &mut [f64],
-    ) -> Result<SolveStats, LinalgError> {
-        let n = self.n;
-        r.copy_from_slice(b);
-        self.apply(r, z)?;
-        p.copy_from_slice(z);
-        let mut rz = dot(r, z);
-        let mut rel = 1.0;
-        let mut restarted = false;
-        for it in 1..=self.max_iterations {
-            self.mul(a, p, ap);
-            let pap = dot(p, ap);
-            self.last_cg_iterations = it;
-            if !pap.is_finite() || pap <= 0.0 {
-                return Err(LinalgError::Singular(format!("Schwarz PCG breakdown at iteration {it}: pᵀAp = {pap:e} (matrix not positive definite)")));
-            }
-            let alpha = rz / pap;
-            let mut rr = 0.0;
-            for i in 0..n {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-                rr += r[i] * r[i];
-            }
-            rel = rr.sqrt() / bnorm;
-            if rel <= self.tol {
-                // confirm with the true residual; restart from it once if it does not hold
-                self.mul(a, x, ap);
-                for i in 0..n {
-                    r[i] = b[i] - ap[i];
-                }
-                rel = dot(r, r).sqrt() / bnorm;
-                if rel <= self.tol {
-                    return Ok(SolveStats { iterations: it, relative_residual: rel });
-                }
-                if restarted && rel <= 10.0 * self.tol {
-                    return Ok(SolveStats { iterations: it, relative_residual: rel });
-                }
-                restarted = true;
-                self.apply(r, z)?;
-                p.copy_from_slice(z);
-                rz = dot(r, z);
-                continue;
-            }
-            self.apply(r, z)?;
-            let rz_new = dot(r, z);
-            if !rz_new.is_finite() || rz_new <= 0.0 {
-                return Err(LinalgError::Singular(format!("Schwarz PCG breakdown at iteration {it}: rᵀM⁻¹r = {rz_new:e} (preconditioner not positive definite)")));
-            }
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for i in 0..n {
-                p[i] = z[i] + beta * p[i];
-            }
-        }
-        Err(LinalgError::NotConverged { iterations: self.max_iterations, residual: rel, tol: self.tol })
     }
 
     /// Restarted GMRES with the preconditioner on the right (it minimises the true residual,
