@@ -94,7 +94,7 @@ pub fn write<T: Serialize>(dir: &Path, sim: &Simulation, case_sha256: &str, run:
     let scalars = cbor(&state.scalars).map_err(&werr)?;
     let run = cbor(run).map_err(&werr)?;
     {
-        let f = hdf5::File::create(&tmp).map_err(h5err(&tmp))?;
+        let f = crate::h5::create(&tmp).map_err(h5err(&tmp))?;
         write_h5(&f, sim, &state, case_sha256, &scalars, &run).map_err(h5err(&tmp))?;
         f.flush().map_err(h5err(&tmp))?;
         f.close().map_err(h5err(&tmp))?;
@@ -188,7 +188,7 @@ impl Checkpoint {
             return Err(CheckpointError::Missing { path });
         }
         let corrupt = |reason: String| CheckpointError::Corrupt { path: path.clone(), reason };
-        let f = hdf5::File::open(&path).map_err(|e| corrupt(e.to_string()))?;
+        let f = crate::h5::open(&path).map_err(|e| corrupt(e.to_string()))?;
         Self::read_h5(&f, &path).map_err(corrupt)
     }
 

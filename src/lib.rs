@@ -28,6 +28,7 @@ pub mod distribute;
 pub mod dynamics;
 pub mod element;
 pub mod fits;
+pub mod h5;
 pub mod linalg;
 pub mod material;
 pub mod mesh;

@@ -283,7 +283,7 @@ pub fn output_steps(h5: &Path) -> Result<Vec<usize>, PlotError> {
         path: h5.to_path_buf(),
         source,
     };
-    let file = hdf5::File::open(h5).map_err(hdf)?;
+    let file = crate::h5::open(h5).map_err(hdf)?;
     let g = file
         .group("steps")
         .map_err(|_| input(h5, "no group /steps: not an mpfem results.h5"))?;
@@ -306,7 +306,7 @@ pub fn read_snapshot(h5: &Path, step: usize) -> Result<Snapshot, PlotError> {
         path: h5.to_path_buf(),
         source,
     };
-    let file = hdf5::File::open(h5).map_err(hdf)?;
+    let file = crate::h5::open(h5).map_err(hdf)?;
     let name = format!("steps/{step:06}");
     let g = file.group(&name).map_err(|_| {
         input(

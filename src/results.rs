@@ -118,7 +118,7 @@ impl ResultsWriter {
         let xdmf_path = dir.join("results.xdmf");
         let walls_xdmf_path = dir.join("walls.xdmf");
         let _ = std::fs::remove_file(&walls_xdmf_path);
-        let file = hdf5::File::create(&h5_path).map_err(|source| ResultsError::Hdf5 {
+        let file = crate::h5::create(&h5_path).map_err(|source| ResultsError::Hdf5 {
             path: h5_path.clone(),
             source,
         })?;
@@ -165,7 +165,7 @@ impl ResultsWriter {
             tracing::warn!(path = %h5_path.display(), "restart: no results.h5 to continue, the steps before the checkpoint are missing");
             return Self::create(dir, every, columns);
         }
-        let file = hdf5::File::open_rw(&h5_path).map_err(|source| ResultsError::Hdf5 { path: h5_path.clone(), source })?;
+        let file = crate::h5::open_rw(&h5_path).map_err(|source| ResultsError::Hdf5 { path: h5_path.clone(), source })?;
         let every = every.max(1);
         let mut w = Self {
             file,

@@ -72,7 +72,7 @@ fn bits(v: &[f64]) -> Vec<u64> {
 }
 
 fn checkpoint_step(dir: &Path) -> u64 {
-    let f = hdf5::File::open(dir.join("checkpoint.h5")).unwrap();
+    let f = mpfem::h5::open(&dir.join("checkpoint.h5")).unwrap();
     f.attr("step").unwrap().read_scalar().unwrap()
 }
 
@@ -84,7 +84,7 @@ fn assert_same_run(a: &Path, b: &Path) {
     for (k, (x, y)) in ha.iter().zip(&hb).enumerate() {
         assert_eq!(x, y, "history.csv line {k} differs");
     }
-    let (fa, fb) = (hdf5::File::open(a.join("results.h5")).unwrap(), hdf5::File::open(b.join("results.h5")).unwrap());
+    let (fa, fb) = (mpfem::h5::open(&a.join("results.h5")).unwrap(), mpfem::h5::open(&b.join("results.h5")).unwrap());
     let hist = |f: &hdf5::File| f.dataset("history").unwrap().read_raw::<f64>().unwrap();
     assert_eq!(bits(&hist(&fa)), bits(&hist(&fb)), "results.h5 /history differs");
     let (sa, sb) = (fa.group("steps").unwrap().member_names().unwrap(), fb.group("steps").unwrap().member_names().unwrap());
@@ -130,7 +130,7 @@ fn restart_from_a_periodic_checkpoint_is_bit_for_bit() {
     let err = run_ok(&case, &a, &[]);
     let lines = history_lines(&a);
     assert_eq!(lines.len() - 1, 34, "the job's 34 steps");
-    assert_eq!(hdf5::File::open(a.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap().len(), 34, "one output step per step");
+    assert_eq!(mpfem::h5::open(&a.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap().len(), 34, "one output step per step");
     assert_eq!(checkpoint_step(&a), 24);
     assert_eq!(err.matches("mpfem: checkpoint at step").count(), 2, "one line per checkpoint: {err}");
     assert!(!a.join("checkpoint.h5.tmp").exists());
@@ -193,7 +193,7 @@ fn sigterm_leaves_a_checkpoint_and_the_restart_is_bit_for_bit() {
     let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["status"], "interrupted");
     assert_eq!(s["run"]["interrupted"], true);
-    let steps = hdf5::File::open(d.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap();
+    let steps = mpfem::h5::open(&d.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap();
     assert_eq!(steps.len(), rows, "results.h5 readable with every step up to the signal");
     // the interrupted history is the uninterrupted one's beginning
     assert_eq!(history_lines(&d)[..], history_lines(&a)[..=rows]);
@@ -230,7 +230,7 @@ fn restart_after_a_remesh_is_bit_for_bit() {
     assert_eq!(checkpoint_step(&a) as usize, ck_step);
     // the checkpoint carries the new mesh (not the case's)
     let ck = mpfem::checkpoint::Checkpoint::read(&a).unwrap();
-    let f = hdf5::File::open(a.join("results.h5")).unwrap();
+    let f = mpfem::h5::open(&a.join("results.h5")).unwrap();
     let cells0 = f.group("steps/000001").unwrap().dataset("cells").unwrap().shape()[0];
     assert_ne!(ck.meshes[0].n_elements(), cells0, "the checkpoint's mesh is the re-meshed one");
 
@@ -349,7 +349,7 @@ fn restart_with_sparse_output_and_at_the_last_step() {
         run_ok(&case, &a, &[]);
         assert_eq!(history_lines(&a).len() - 1, 14);
         assert_eq!(checkpoint_step(&a), ck);
-        let steps = hdf5::File::open(a.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap();
+        let steps = mpfem::h5::open(&a.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap();
         assert_eq!(steps, ["000004", "000008", "000012", "000014"]);
         let b = dir.join(format!("b{k}"));
         copy_dir(&a, &b);

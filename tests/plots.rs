@@ -219,7 +219,7 @@ fn run_draws_the_pressure_plot_and_snapshots_by_default() {
 
     // snapshots: output steps 2, 4, 6 and the last step (7): all four drawn
     let steps = {
-        let f = hdf5::File::open(out.join("results.h5")).unwrap();
+        let f = mpfem::h5::open(&out.join("results.h5")).unwrap();
         let mut v: Vec<usize> = f
             .group("steps")
             .unwrap()
@@ -256,7 +256,7 @@ fn run_draws_the_pressure_plot_and_snapshots_by_default() {
 
     // equal aspect ratio: the box of the coloured (saturated) pixels of the mesh panel has the
     // shape of the particles' box at that step, within 3 % (a pixel or two of edge lines)
-    let f = hdf5::File::open(out.join("results.h5")).unwrap();
+    let f = mpfem::h5::open(&out.join("results.h5")).unwrap();
     let xy: Vec<f64> = f
         .dataset(&format!("steps/{last:06}/coordinates"))
         .unwrap()

@@ -419,7 +419,7 @@ fn a_run_with_remeshing_keeps_volume_and_writes_each_mesh() {
     assert!(worst_volume <= 1e-8, "volume error {worst_volume:.3e}");
 
     // every step's own mesh in results.h5
-    let file = hdf5::File::open(out.join("results.h5")).unwrap();
+    let file = mpfem::h5::open(&out.join("results.h5")).unwrap();
     let steps = file.group("steps").unwrap().member_names().unwrap();
     assert_eq!(steps.len(), rows.len(), "one output step per history row");
     let mut counts = Vec::new();

@@ -89,7 +89,7 @@ fn run_writes_results_h5_and_xdmf_matching_the_history() {
         .filter(|(s, _)| s % 2 == 0 || *s == last.0)
         .collect();
 
-    let file = hdf5::File::open(out.join("results.h5")).unwrap();
+    let file = mpfem::h5::open(&out.join("results.h5")).unwrap();
     let steps = file.group("steps").unwrap();
     let mut names = steps.member_names().unwrap();
     names.sort();
@@ -386,7 +386,7 @@ fn killed_run_leaves_a_readable_results_file() {
     xml_tags(&text);
     let named = text.matches("<Grid Name=\"step_").count();
     assert!(named >= 3);
-    let file = hdf5::File::open(out.join("results.h5")).unwrap();
+    let file = mpfem::h5::open(&out.join("results.h5")).unwrap();
     let steps = file.group("steps").unwrap();
     for block in text.split("<Grid Name=\"step_").skip(1) {
         let name = &block[..6];
