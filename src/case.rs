@@ -230,6 +230,11 @@ pub struct ContactSpec {
     /// Retry a step that fails with the inertial anchor at the same size with the viscous one
     /// before cutting back.
     pub viscous_retry: bool,
+    /// On a step smaller than `[time] dt` the springs stiffen as a fixed nodal mass (inertial
+    /// anchor: by (dt/Δt)²) or a fixed dashpot (viscous anchor: by dt/Δt) would, so that a
+    /// cut-back always ends where the springs outweigh any loss of stability of the particles
+    /// (a snap-through between two interlocked corners, a buckling column).
+    pub stiffen_on_cutback: bool,
     /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
     /// steadies the Newton iterations of weakly held particles without changing the solution
     /// or dissipating energy.
@@ -256,6 +261,7 @@ impl Default for ContactSpec {
             stabilise: Stabilise::All,
             stabilisation_kind: StabilisationKind::Inertial,
             viscous_retry: false,
+            stiffen_on_cutback: false,
             regularisation: 0.0,
             search_distance: None,
             lagrange_regularisation: 1e-4,
@@ -942,6 +948,7 @@ mod raw {
         pub stabilise: Option<String>,
         pub stabilisation_kind: Option<String>,
         pub viscous_retry: Option<bool>,
+        pub stiffen_on_cutback: Option<bool>,
         pub regularisation: Option<f64>,
         pub search_distance: Option<f64>,
         pub lagrange_regularisation: Option<f64>,
@@ -2356,6 +2363,9 @@ impl Cx<'_> {
                 return Err(self.err("contact.viscous_retry", "value true: the springs are viscous already; expected viscous_retry only with stabilisation_kind = \"inertial\""));
             }
             spec.viscous_retry = v;
+        }
+        if let Some(v) = c.stiffen_on_cutback {
+            spec.stiffen_on_cutback = v;
         }
         if let Some(v) = c.regularisation {
             spec.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;

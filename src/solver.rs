@@ -264,6 +264,8 @@ pub struct Simulation {
     node_body: Vec<usize>,
     /// Stabilise every dof in the current step (a retry after a failure).
     stab_all: bool,
+    /// Factor of the stabilisation springs in this step (`stiffen_on_cutback`; 1 otherwise).
+    stab_scale: f64,
     /// Anchor the springs at the last converged position in the current step, whatever
     /// `stabilisation_kind` says (a retry after a failure with the inertial anchor).
     stab_viscous: bool,
@@ -454,6 +456,7 @@ impl Simulation {
             stab_k,
             node_body,
             stab_all: false,
+            stab_scale: 1.0,
             stab_anchor: vec![0.0; n_dofs],
             stab_viscous: false,
             reg_k,
@@ -1267,7 +1270,7 @@ impl Simulation {
                     self.f_int[d] += k * (u[d] - self.stab_anchor[d]);
                 }
                 let q = self.assembler.eq[d];
-                let kt = self.stab_base[d] + kr;
+                let kt = self.stab_scale * self.stab_base[d] + kr;
                 if root_tangent && q != FIXED && kt > 0.0 {
                     if let Some(pos) = self.kk.find(q, q) {
                         self.kk.values[pos] += kt;
@@ -1387,14 +1390,24 @@ impl Simulation {
             for d in 0..self.stab_anchor.len() {
                 self.stab_anchor[d] = self.sol.u[d] + s * (self.sol.u[d] - self.u_prev[d]);
             }
+            // a step cut below the case's Δt: springs of a fixed mass (k ∝ 1/Δt²) or dashpot
+            // (k ∝ 1/Δt) instead of fixed springs
+            self.stab_scale = 1.0;
+            if self.model.contact.stiffen_on_cutback && dt > 0.0 && dt < self.time.dt {
+                let ratio = self.time.dt / dt;
+                self.stab_scale = if inertial { ratio * ratio } else { ratio };
+            }
             // stabilisation of this step: every dof, or only the directions the contacts of
             // the last converged state do not hold
+            let scale = self.stab_scale;
             if self.stab_all || self.model.contact.stabilise == Stabilise::All {
-                self.stab_k.copy_from_slice(&self.stab_base);
+                for (k, b) in self.stab_k.iter_mut().zip(&self.stab_base) {
+                    *k = scale * b;
+                }
             } else {
                 let held = c.body_support(&x_n, self.model.bodies.len());
                 for (d, k) in self.stab_k.iter_mut().enumerate() {
-                    *k = if held[self.node_body[d / 2]][d % 2] { 0.0 } else { self.stab_base[d] };
+                    *k = if held[self.node_body[d / 2]][d % 2] { 0.0 } else { scale * self.stab_base[d] };
                 }
             }
         }
@@ -1553,7 +1566,26 @@ impl Simulation {
             let reference = self.reference_force();
             let rel = rnorm / reference;
             residuals.push(rel);
-            tracing::debug!(iteration = k, residual = rel, energy = e_last, "newton");
+            if tracing::enabled!(tracing::Level::DEBUG) {
+                // where the largest out-of-balance force sits, to tell a stalled contact zone
+                // from a global non-convergence
+                let (mut worst_dof, mut worst) = (0, 0.0f64);
+                for (d, &q) in self.assembler.eq.iter().enumerate() {
+                    if q != FIXED && self.r[q].abs() > worst {
+                        (worst_dof, worst) = (d, self.r[q].abs());
+                    }
+                }
+                let node = worst_dof / 2;
+                let x = self.model.x0.get(node).map_or([f64::NAN; 2], |p| [p[0] + u[2 * node], p[1] + u[2 * node + 1]]);
+                tracing::debug!(iteration = k, residual = rel, energy = e_last, active = self.contact_stats.active, worst_force = worst, worst_node = node, body = self.node_body.get(node).copied().unwrap_or(0), x = ?x, "newton");
+                if tracing::enabled!(tracing::Level::TRACE) {
+                    if let Some(c) = &self.contact {
+                        for line in c.describe_node(node, &self.coords(u)) {
+                            tracing::trace!(node, "{line}");
+                        }
+                    }
+                }
+            }
             if !rnorm.is_finite() || (k > 2 && rel > 1e8 * residuals[0].max(1e-300)) {
                 return Err(NewtonFailure::Diverged { iteration: k, residuals });
             }

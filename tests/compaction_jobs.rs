@@ -261,3 +261,47 @@ fn octagons_hitting_at_rest_need_the_viscous_retry() {
     let t = sim.sol.time;
     assert!((3.0..4.0).contains(&t), "failed at t = {t} s ({err}), expected at the impact near 3.47 s");
 }
+
+/// `[contact] stiffen_on_cutback` (`tests/data/two_discs_snap.toml`): two frictionless discs
+/// (R = 10 mm) stacked 0.5 mm off-centre in a 44 mm wide die, pressed by the top wall, which
+/// moves down by 20 mm. Disc on disc is unstable: the upper disc must slide off sideways, and
+/// only the ζ springs resist that. With fixed springs every cut-back of that step fails alike
+/// (measured: the run stops at t = 0.95 s, dt below dt_min). With springs that stiffen like a
+/// fixed mass as the step is cut, the snap is followed in small steps and the run reaches its
+/// end time, where the geometry leaves one answer: the top wall ends 20.5 mm above the bottom
+/// one, so two discs of diameter 20 fit only side by side — both centres at most 10.5 mm high
+/// and at least 2R apart (tolerance 0.2 mm for the penalty overlap and the mesh's polygonal
+/// outline), inside the die, and no wall loaded (the discs have 0.5 mm of room).
+#[test]
+fn a_snap_through_is_followed_when_the_springs_stiffen_on_cut_back() {
+    let path = std::path::Path::new("tests/data/two_discs_snap.toml");
+    let c = case::load(path).unwrap();
+    assert!(c.contact.stiffen_on_cutback);
+    let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
+    let summary = sim.run(&mut |_, _| {}).unwrap_or_else(|e| panic!("with stiffening: {e}"));
+    assert!((sim.sol.time - 20.0).abs() < 1e-9, "stopped at t = {} s", sim.sol.time);
+    let x = sim.coords(&sim.sol.u);
+    let centre = |b: usize| {
+        let body = &sim.model.bodies[b];
+        let nodes = &x[body.node_offset..body.node_offset + body.mesh.n_nodes()];
+        let n = nodes.len() as f64;
+        [nodes.iter().map(|p| p[0]).sum::<f64>() / n, nodes.iter().map(|p| p[1]).sum::<f64>() / n]
+    };
+    let (lo, up) = (centre(0), centre(1));
+    eprintln!("stiffened: {} steps, {} cut-backs; centres {lo:?} and {up:?}", summary.steps, summary.cutbacks);
+    let tol = 0.2;
+    for p in [lo, up] {
+        assert!(p[1] <= 10.5 + tol && p[1] >= 10.0 - tol, "centre {p:?}: the discs must lie on the bottom wall");
+        assert!(p[0] >= 10.0 - tol && p[0] <= 34.0 + tol, "centre {p:?} outside the die");
+    }
+    assert!((up[0] - lo[0]).abs() >= 20.0 - tol, "side by side: centres {lo:?} and {up:?}");
+    let last = summary.last.as_ref().and_then(|r| r.compaction.clone()).expect("a compaction report");
+    assert!(last.pressure.iter().all(|p| p.abs() < 1e-9), "no wall is loaded at the end: {:?}", last.pressure);
+
+    let mut c = case::load(path).unwrap();
+    c.contact.stiffen_on_cutback = false;
+    let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
+    let err = sim.run(&mut |_, _| {}).expect_err("with fixed springs the snap must fail");
+    let t = sim.sol.time;
+    assert!((0.5..1.5).contains(&t), "failed at t = {t} s ({err}), expected when the wall first loads the pair");
+}

@@ -437,6 +437,35 @@ impl ContactProblem {
         }
     }
 
+    /// The frozen pairs that involve `node` (as the slave, or as a node of the master segment
+    /// or its smoothing neighbours) on configuration `x`, one line each: for the logs of a
+    /// stalled Newton solve.
+    pub fn describe_node(&self, node: usize, x: &[[f64; 2]]) -> Vec<String> {
+        let mut lines = Vec::new();
+        for p in &self.pairs {
+            let (slave, body) = self.slaves[p.slave];
+            let s = self.segments[p.segment];
+            let [prev, next] = self.neighbours[p.segment];
+            let role = if slave == node {
+                "slave"
+            } else if s.nodes.contains(&node) {
+                "master"
+            } else if prev == Some(node) || next == Some(node) {
+                "neighbour"
+            } else {
+                continue;
+            };
+            let (xi, gap) = if self.smoothed() {
+                smooth::smooth_project(x[slave], &self.master(p.segment, x)).map_or((f64::NAN, f64::NAN), |g| (g.xi, g.gap))
+            } else {
+                let g = kernels::nts_project(x[slave], x[s.nodes[0]], x[s.nodes[1]]);
+                (g.xi, g.gap)
+            };
+            lines.push(format!("{role}: slave {slave} (body {body}) on segment {:?} (body {}) weight {} xi {xi:.6} gap {gap:.6e}", s.nodes, s.body, p.weight));
+        }
+        lines
+    }
+
     /// Choose the node-to-segment pairs for the next step on configuration `x` (frozen during
     /// the step). Returns true when the set of pairs changed (the sparsity pattern must follow).
     pub fn select_pairs(&mut self, x: &[[f64; 2]]) -> bool {
