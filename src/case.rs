@@ -676,6 +676,10 @@ pub struct SolverSpec {
     pub incompressible_penalty: f64,
     pub volume_tol: f64,
     pub max_volume_updates: usize,
+    /// Distributed runs: after a re-mesh the particles keep their processes while the load
+    /// imbalance (heaviest process's element count / mean) stays at most this (≥ 1); above it
+    /// the particle graph is partitioned again.
+    pub repartition_imbalance: f64,
 }
 
 impl Default for SolverSpec {
@@ -695,6 +699,7 @@ impl Default for SolverSpec {
             incompressible_penalty: 1000.0,
             volume_tol: 1e-10,
             max_volume_updates: 30,
+            repartition_imbalance: 1.05,
         }
     }
 }
@@ -1168,6 +1173,7 @@ mod raw {
         pub incompressible_penalty: Option<f64>,
         pub volume_tol: Option<f64>,
         pub max_volume_updates: Option<i64>,
+        pub repartition_imbalance: Option<f64>,
     }
 
     #[derive(Deserialize)]
@@ -3142,6 +3148,14 @@ impl Cx<'_> {
         }
         if let Some(v) = r.max_volume_updates {
             s.max_volume_updates = self.count("solver.max_volume_updates", v, 1)?;
+        }
+        if let Some(v) = r.repartition_imbalance {
+            s.repartition_imbalance = self.num(
+                "solver.repartition_imbalance",
+                v,
+                v >= 1.0,
+                "a load imbalance (heaviest process's element count / mean) >= 1",
+            )?;
         }
         Ok(s)
     }

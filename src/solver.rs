@@ -24,7 +24,7 @@ use crate::element::Volumetric;
 use crate::linalg::{make_solver_with, CsrMatrix, LinalgError, LinearSolver, LinearSolverKind, SolverOptions};
 use crate::material::{ConstitutiveLaw, TimeIncrement};
 use crate::model::Model;
-use crate::parallel::{Collective, Distribution, Serial};
+use crate::parallel::{Collective, Distribution, PartitionStats, Serial};
 use serde::{Deserialize, Serialize};
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -129,6 +129,9 @@ pub struct RunSummary {
     pub interrupted: bool,
     /// Wall time spent per phase (s).
     pub timing: Timing,
+    /// The partition over the processes: ranks, current imbalance and edge cut, repartitions
+    /// (see [`crate::parallel::PartitionStats`]).
+    pub partition: PartitionStats,
 }
 
 /// Accumulated wall time per phase of the solution (s).
@@ -198,6 +201,10 @@ pub struct SimScalars {
     pub timing: Timing,
     pub remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,
     pub last_report: Option<StepReport>,
+    /// Repartitions, kept partitions, moved particles and partitioning time of the run so far
+    /// (absent from older checkpoints: zero).
+    #[serde(default)]
+    pub partition: PartitionTotals,
     pub contact: Option<crate::contact::driver::ContactState>,
 }
 
@@ -212,6 +219,17 @@ pub struct SimState {
     pub u_prev: Vec<f64>,
     /// Newmark state u, v, a, g of an implicit dynamic analysis.
     pub dynamics: Option<[Vec<f64>; 4]>,
+}
+
+/// The counts of [`PartitionStats`] that add up over a run (and over its restarts, whatever
+/// the number of processes), kept in a checkpoint.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PartitionTotals {
+    pub repartitions: usize,
+    pub kept: usize,
+    pub moved: usize,
+    pub time_s: f64,
 }
 
 /// A converged but uncommitted step.
@@ -297,6 +315,8 @@ pub struct Simulation {
     /// What this process owns in a run on several processes (None: one process, the serial
     /// code path), see [`crate::parallel`].
     par: Option<Distribution>,
+    /// The partition's figures (one process: 1 rank, imbalance 1, no cut, no repartitions).
+    partition: PartitionStats,
     /// Whether every process takes part in the linear solves (the Schwarz PCG on several
     /// processes); otherwise rank 0 solves and broadcasts the update.
     distributed_solve: bool,
@@ -313,7 +333,16 @@ impl Simulation {
     /// solves the linear systems (see [`crate::parallel`]). With one process this is
     /// [`Simulation::new`].
     pub fn new_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>) -> Result<Self, SolveError> {
-        let par = Distribution::new(&model, comm.clone());
+        Self::build(model, time, spec, comm, None)
+    }
+
+    /// [`Simulation::new_with`]; with `previous` (the owners of the bodies in the simulation
+    /// this one replaces, when any process owned them, and its partition figures) the owners
+    /// are kept unless their imbalance on the new model is above `[solver]
+    /// repartition_imbalance` (see [`Distribution::build`]).
+    fn build(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>) -> Result<Self, SolveError> {
+        let mut partition = previous.map_or_else(PartitionStats::default, |p| p.1.clone());
+        let par = Distribution::build(&model, comm.clone(), previous.and_then(|p| p.0), spec.repartition_imbalance, &mut partition);
         let n_dofs = model.n_dofs();
         let (eq, n_free) = number_equations(n_dofs, model.prescribed.iter().map(|p| p.dof));
         let mut contact = ContactProblem::new(&model, model.walls.clone(), model.contact.clone());
@@ -473,6 +502,7 @@ impl Simulation {
             last_report: None,
             comm,
             par,
+            partition,
             distributed_solve,
         };
         sim.remesh_baseline = vec![None; sim.model.bodies.len()];
@@ -523,6 +553,7 @@ impl Simulation {
                 remesh_baseline: self.remesh_baseline.clone(),
                 last_report: self.last_report.clone(),
                 contact: self.contact.as_ref().map(|c| c.state()),
+                partition: PartitionTotals { repartitions: self.partition.repartitions, kept: self.partition.kept, moved: self.partition.moved, time_s: self.partition.time_s },
             },
             sol: self.sol.clone(),
             u_prev: self.u_prev.clone(),
@@ -587,6 +618,11 @@ impl Simulation {
         self.timing = s.timing;
         self.remesh_baseline = s.remesh_baseline;
         self.last_report = s.last_report;
+        // the run's counts so far; the current partition (on this run's processes) is this one's
+        self.partition.repartitions = s.partition.repartitions;
+        self.partition.kept = s.partition.kept;
+        self.partition.moved = s.partition.moved;
+        self.partition.time_s += s.partition.time_s;
         Ok(())
     }
 
@@ -674,7 +710,9 @@ impl Simulation {
             moved.state.j0.iter_mut().for_each(|j| *j = 1.0);
         }
         let model = self.model.with_body_mesh(b, new_mesh).map_err(|e| fail(e.to_string()))?;
-        let mut next = Simulation::new_with(model, self.time, self.spec, self.comm.clone())?;
+        // the owners are kept unless the new element counts unbalance them too much
+        let owners = self.par.as_ref().map(|p| p.body_owner.as_slice());
+        let mut next = Simulation::build(model, self.time, self.spec, self.comm.clone(), Some((owners, &self.partition)))?;
         // the solution: other bodies renumbered, the re-meshed body from the transfer
         for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
             if c == b {
@@ -958,6 +996,12 @@ impl Simulation {
         self.distributed_solve
     }
 
+    /// The partition of the bodies over the processes: ranks, imbalance, edge cut and the
+    /// repartitions so far (one process: 1, 1, 0, 0).
+    pub fn partition(&self) -> &PartitionStats {
+        &self.partition
+    }
+
     pub fn linear_solver_name(&self) -> &str {
         &self.linear_name
     }
@@ -1063,6 +1107,7 @@ impl Simulation {
             stop_reason,
             interrupted,
             timing: self.timing.clone(),
+            partition: self.partition.clone(),
         })
     }
 

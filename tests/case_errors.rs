@@ -268,6 +268,12 @@ fn other_validation_errors() {
     // bad choice strings
     let e = err_of(&format!("{BASE}\n[solver]\nlinear = \"gmres\"\n"));
     assert_has(&e, &["solver.linear", "\"gmres\"", "\"cholesky\""]);
+    // repartition threshold: an imbalance, at least 1 (1 itself is allowed)
+    let e = err_of(&format!("{BASE}\n[solver]\nrepartition_imbalance = 0.9\n"));
+    assert_has(&e, &["solver.repartition_imbalance", "0.9", ">= 1"]);
+    let e = err_of(&format!("{BASE}\n[solver]\nrepartition_imbalance = nan\n"));
+    assert_has(&e, &["solver.repartition_imbalance", "NaN", ">= 1"]);
+    assert_eq!(parse(&format!("{BASE}\n[solver]\nrepartition_imbalance = 1.0\n")).unwrap().solver.repartition_imbalance, 1.0);
     let e = err_of(&format!("[model]\nformulation = \"eulerian\"\n{BASE}"));
     assert_has(
         &e,
@@ -489,6 +495,7 @@ fn defaults_are_applied() {
     assert_eq!(s.incompressible_penalty, 1000.0);
     assert_eq!(s.volume_tol, 1e-10);
     assert_eq!(s.max_volume_updates, 30);
+    assert_eq!(s.repartition_imbalance, 1.05);
     assert!(c.output.reactions.is_empty() && c.output.displacements.is_empty());
     assert_eq!(c.linear_kind(), LinearSolverKind::Cholesky);
 

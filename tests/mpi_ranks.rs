@@ -306,3 +306,80 @@ fn the_scaling_study_runs_from_one_command() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Repartitioning after a re-mesh (`[solver] repartition_imbalance`): the 3 × 3 disc case with
+/// `[remesh]` (min_scaled_jacobian = 0.5, so that an inverted element re-meshes its particle
+/// rather than cutting the step back) and stopped at solid ratio 0.785: at t = 0.2 s an element
+/// of disc 0 inverts, the disc is re-meshed (84 → 156 elements, measured) and the step retried;
+/// 5 steps in all. On 2 ranks METIS first puts 4 and 5 discs (336 and 420 elements,
+/// imbalance 1.111) on the ranks; the re-mesh changes the imbalance of these owners to 1.188
+/// when disc 0 is on the heavier rank (measured; 1.014 otherwise). Then
+/// - with `repartition_imbalance = 1.0` any imbalance repartitions: summary.json reports 1
+///   repartition (one re-mesh, one decision), none kept;
+/// - with `repartition_imbalance = 10` the owners are always kept: 0 repartitions, 1 kept,
+///   and the imbalance reported is that of the kept owners, not below the repartitioned one;
+/// - both histories equal the serial run's: the wall pressures to the 1e-8 relative,
+///   and in fact byte for byte, which the test requires (which rank assembles which particle
+///   does not change a single sum: every element force and tangent entry has one owner);
+/// - the serial run reports 1 rank, imbalance 1, edge cut 0, no repartitions.
+#[test]
+fn repartitioning_after_a_remesh_keeps_the_serial_history() {
+    let dir = tmpdir("repart");
+    let text = std::fs::read_to_string(CASE).expect("case");
+    let base = text
+        .replace("[stop]\nsolid_ratio = 0.80", "[stop]\nsolid_ratio = 0.785")
+        .replace("[output]\nevery = 0", "[remesh]\nmin_scaled_jacobian = 0.5\n\n[output]\nevery = 0");
+    assert!(base.contains("solid_ratio = 0.785") && base.contains("[remesh]"), "the case's [stop] or [output] table moved");
+    let write = |name: &str, threshold: Option<f64>| -> PathBuf {
+        let t = match threshold {
+            Some(t) => base.replace("residual_tol = 1e-11", &format!("residual_tol = 1e-11\nrepartition_imbalance = {t:?}")),
+            None => base.clone(),
+        };
+        assert!(threshold.is_none() || t.contains("repartition_imbalance"), "no [solver] residual_tol in the case");
+        let p = dir.join(name);
+        std::fs::write(&p, t).expect("write case");
+        p
+    };
+    let summary = |d: &Path| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).expect("summary.json")).expect("json") };
+    let serial_dir = dir.join("serial");
+    run_case(write("serial.toml", None).to_str().expect("utf-8"), None, &serial_dir);
+    let (header, serial) = read_history(&serial_dir);
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let remeshes: f64 = serial.iter().map(|r| r[col("remeshes")]).sum();
+    assert!(remeshes >= 1.0, "the serial run re-meshed no particle");
+    let s = summary(&serial_dir);
+    let p = &s["run"]["partition"];
+    assert_eq!((p["ranks"].as_u64(), p["imbalance"].as_f64(), p["edge_cut"].as_u64(), p["repartitions"].as_u64()), (Some(1), Some(1.0), Some(0), Some(0)), "serial run: {p}");
+    let mut imbalance = Vec::new();
+    for (threshold, repartitioned) in [(1.0, true), (10.0, false)] {
+        let out = dir.join(format!("ranks2_{threshold}"));
+        run_case(write(&format!("t{threshold}.toml"), Some(threshold)).to_str().expect("utf-8"), Some(2), &out);
+        let (h, rows) = read_history(&out);
+        assert_eq!(h, header, "threshold {threshold}: columns");
+        assert_eq!(rows.len(), serial.len(), "threshold {threshold}: {} steps, serial {}", rows.len(), serial.len());
+        for name in COMPARED.iter().chain(&["remeshes"]) {
+            let c = col(name);
+            let scale = serial.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+            for (a, b) in rows.iter().zip(&serial) {
+                assert!((a[c] - b[c]).abs() <= TOL * scale, "threshold {threshold}: {name} at step {}: {} vs serial {}", b[col("step")], a[c], b[c]);
+            }
+        }
+        assert_eq!(std::fs::read(out.join("history.csv")).ok(), std::fs::read(serial_dir.join("history.csv")).ok(), "threshold {threshold}: history.csv differs from the serial run's");
+        let s = summary(&out);
+        let p = &s["run"]["partition"];
+        let n = |k: &str| p[k].as_u64().unwrap_or_else(|| panic!("run.partition.{k} missing: {p}"));
+        assert_eq!(n("ranks"), 2, "{p}");
+        assert_eq!(n("repartitions") + n("kept"), remeshes as u64, "threshold {threshold}: one decision per re-mesh: {p}");
+        if repartitioned {
+            assert!(n("repartitions") >= 1, "threshold {threshold}: no repartition: {p}");
+        } else {
+            assert_eq!(n("repartitions"), 0, "threshold {threshold}: {p}");
+        }
+        let imb = p["imbalance"].as_f64().expect("imbalance");
+        assert!((1.0..2.0).contains(&imb), "threshold {threshold}: imbalance {imb}");
+        println!("2 ranks, repartition_imbalance = {threshold}: {p}; history.csv byte-identical to the serial run");
+        imbalance.push(imb);
+    }
+    assert!(imbalance[1] >= imbalance[0], "the kept owners ({}) are better balanced than the repartitioned ones ({})", imbalance[1], imbalance[0]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -28,6 +28,14 @@
 //!
 //! Physics code (elements, materials, contact kernels) never sees this module; a serial run uses
 //! [`Serial`], whose operations do nothing, and takes exactly the serial code path.
+//!
+//! Repartitioning: when the model changes (a particle is re-meshed, which changes its element
+//! count; bodies keep their indices), the simulation is rebuilt and [`Distribution::build`] is
+//! given the previous owners: they are kept while their load imbalance with the new element
+//! counts is at most `[solver] repartition_imbalance`, otherwise METIS partitions the particle
+//! graph again ([`crate::distribute::rebalance`]). Since all state is replicated, a change of
+//! owners moves no data: it only changes who assembles which elements (and who owns which
+//! Schwarz blocks). The figures go to the log and to `summary.json` ([`PartitionStats`]).
 
 #[cfg(feature = "mpi")]
 pub mod mpi;
@@ -36,7 +44,9 @@ use crate::assembly::{AssemblyError, ElementFields};
 use crate::element::N_ENH;
 use crate::material::{MatState, MaterialError};
 use crate::model::Model;
+use serde::{Deserialize, Serialize};
 use std::sync::Arc;
+use std::time::Instant;
 
 /// The collective operations of a group of processes (MPI ranks), as the solver driver uses
 /// them. Every process must call the same operations in the same order with buffers of the
@@ -105,6 +115,35 @@ pub fn launch() -> Arc<dyn Collective> {
 /// stress: 4), pressure, Θ and the enhanced modes.
 const FIELD_WIDTH: usize = 4 * 6 + 16 + 2 + N_ENH;
 
+/// The partition of a run over its processes, for `summary.json` (`run.partition`): the
+/// current one and the repartitions so far. One process: `ranks` 1, `imbalance` 1, `edge_cut`
+/// 0, no repartitions. Missing fields read as these defaults (older files).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PartitionStats {
+    /// Number of processes.
+    pub ranks: usize,
+    /// Heaviest process's element count over the mean ([`crate::distribute::imbalance`]).
+    pub imbalance: f64,
+    /// Close pairs of particles (edges of the particle graph) owned by different processes.
+    pub edge_cut: usize,
+    /// Model changes (re-meshes) after which the particle graph was partitioned again, the
+    /// imbalance of the owners being above `[solver] repartition_imbalance`.
+    pub repartitions: usize,
+    /// Model changes after which the owners were kept (imbalance within the threshold).
+    pub kept: usize,
+    /// Particles that changed owner over the repartitions.
+    pub moved: usize,
+    /// Wall-clock time spent on the partitions and decisions (graphs, METIS), s.
+    pub time_s: f64,
+}
+
+impl Default for PartitionStats {
+    fn default() -> Self {
+        Self { ranks: 1, imbalance: 1.0, edge_cut: 0, repartitions: 0, kept: 0, moved: 0, time_s: 0.0 }
+    }
+}
+
 /// Who owns what in a run on several processes (more than one).
 pub struct Distribution {
     pub comm: Arc<dyn Collective>,
@@ -122,11 +161,47 @@ impl Distribution {
     /// Partition the model's bodies over the processes of `comm` (METIS k-way on the particle
     /// graph: the same on every process, as the model is). `None` for a single process.
     pub fn new(model: &Model, comm: Arc<dyn Collective>) -> Option<Self> {
+        Self::build(model, comm, None, f64::INFINITY, &mut PartitionStats::default())
+    }
+
+    /// [`Distribution::new`] for a model that has changed (a re-mesh): the `previous` owners of
+    /// its bodies are kept when their imbalance with the new element counts is at most
+    /// `threshold`, otherwise the particle graph is partitioned again
+    /// ([`crate::distribute::rebalance`]); without previous owners it is partitioned. `stats`
+    /// (the run's so far) is brought up to date: the current imbalance and edge cut, a
+    /// repartition or a kept partition counted when there were previous owners, the time
+    /// spent. Rank 0 logs the decision (imbalance before and after, edge cut, particles that
+    /// changed owner, time).
+    ///
+    /// Every process takes the same decision, as it is computed from the replicated model; to
+    /// be sure, rank 0's owners are broadcast and used everywhere (a difference is logged as a
+    /// warning). `None` for a single process (`stats` is then left as it is but for `ranks`).
+    pub fn build(model: &Model, comm: Arc<dyn Collective>, previous: Option<&[usize]>, threshold: f64, stats: &mut PartitionStats) -> Option<Self> {
         let size = comm.size();
+        stats.ranks = size;
         if size <= 1 {
             return None;
         }
-        let body_owner = if model.bodies.len() > 1 { crate::distribute::partition_particles(model, size) } else { vec![0; model.bodies.len()] };
+        let t0 = Instant::now();
+        let graph = crate::distribute::particle_graph_or_weights(model);
+        let decision = crate::distribute::rebalance(&graph, previous, size, threshold, partition::metis_kway);
+        // rank 0's owners everywhere (indices are exact in f64)
+        let mut buf: Vec<f64> = decision.owner.iter().map(|&o| o as f64).collect();
+        comm.broadcast(&mut buf);
+        let body_owner: Vec<usize> = buf.iter().map(|&o| o as usize).collect();
+        let differs = comm.max(if body_owner != decision.owner { 1.0 } else { 0.0 }) > 0.0;
+        let seconds = t0.elapsed().as_secs_f64();
+        stats.imbalance = crate::distribute::imbalance(&graph, &body_owner, size);
+        stats.edge_cut = partition::edge_cut(&graph, &body_owner);
+        stats.time_s += seconds;
+        if previous.is_some() {
+            if decision.repartitioned {
+                stats.repartitions += 1;
+                stats.moved += decision.moved;
+            } else {
+                stats.kept += 1;
+            }
+        }
         let rank = comm.rank();
         let owned_elements: Vec<bool> = model.elem_body.iter().map(|&b| body_owner[b] == rank).collect();
         let mut per_rank = vec![(0usize, 0usize); size];
@@ -135,6 +210,26 @@ impl Distribution {
             per_rank[r].1 += model.bodies[b].mesh.n_elements();
         }
         if comm.is_root() {
+            if differs {
+                tracing::warn!("the processes computed different particle partitions; rank 0's is used");
+            }
+            let imbalance_after = format!("{:.4}", stats.imbalance);
+            if previous.is_none() {
+                tracing::info!(ranks = size, bodies = graph.n_vertices(), imbalance = imbalance_after, edge_cut = stats.edge_cut, seconds, "particle partition");
+            } else {
+                let what = if decision.repartitioned { "model changed: particles repartitioned (imbalance above the threshold)" } else { "model changed: particle owners kept (imbalance within the threshold)" };
+                tracing::info!(
+                    imbalance_before = decision.imbalance_before.map_or_else(|| "-".to_string(), |v| format!("{v:.4}")),
+                    imbalance_after,
+                    threshold,
+                    edge_cut_before = decision.edge_cut_before.map_or(-1, |c| c as i64),
+                    edge_cut_after = stats.edge_cut,
+                    moved = decision.moved,
+                    repartitions = stats.repartitions,
+                    seconds,
+                    "{what}"
+                );
+            }
             tracing::info!(ranks = size, ?per_rank, "bodies and elements per rank");
         }
         let mut elem_order = vec![0; model.elements.len()];
