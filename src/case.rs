@@ -232,7 +232,7 @@ pub struct ContactSpec {
     pub viscous_retry: bool,
     /// On a step smaller than `[time] dt` the springs stiffen as a fixed nodal mass (inertial
     /// anchor: by (dt/Δt)²) or a fixed dashpot (viscous anchor: by dt/Δt) would, so that a
-    /// cut-back always ends where the springs outweigh any loss of stability of the particles
+    /// cut-back in general ends where the springs outweigh a loss of stability of the particles
     /// (a snap-through between two interlocked corners, a buckling column).
     pub stiffen_on_cutback: bool,
     /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
