@@ -911,13 +911,7 @@ mod tests {
         for d in 0..n {
             dense[d][d] += ka;
         }
-        let rows: Vec<Vec<usize>> = dense.iter().map(|r| (0..n).filter(|&j| r[j] != 0.0).collect()).collect();
-        let mut a = CsrMatrix::from_rows(n, &rows);
-        for i in 0..n {
-            for q in a.row_ptr[i]..a.row_ptr[i + 1] {
-                a.values[q] = dense[i][a.col_idx[q]];
-            }
-        }
+        let a = csr_of_dense(&dense);
         let x: Vec<[f64; 2]> = (0..nn).map(|i| [i as f64, 0.1 * (i % 3) as f64]).collect();
         let ranges: Vec<_> = (0..m).map(|b| b * k..(b + 1) * k).collect();
         (a, Subdomains::from_particles(&ranges, &x, Some))
@@ -949,14 +943,20 @@ mod tests {
             dense[p][q] -= 1.0;
             dense[q][p] -= 1.0;
         }
+        csr_of_dense(&dense)
+    }
+
+    /// The nonzero entries of a square dense matrix as a CSR matrix.
+    fn csr_of_dense(dense: &[Vec<f64>]) -> CsrMatrix {
+        let n = dense.len();
         let rows: Vec<Vec<usize>> = dense.iter().map(|r| (0..n).filter(|&j| r[j] != 0.0).collect()).collect();
-        let mut b = CsrMatrix::from_rows(n, &rows);
-        for r in 0..n {
-            for q in b.row_ptr[r]..b.row_ptr[r + 1] {
-                b.values[q] = dense[r][b.col_idx[q]];
+        let mut a = CsrMatrix::from_rows(n, &rows);
+        for (i, row) in dense.iter().enumerate() {
+            for q in a.row_ptr[i]..a.row_ptr[i + 1] {
+                a.values[q] = row[a.col_idx[q]];
             }
         }
-        b
+        a
     }
 
     #[test]
