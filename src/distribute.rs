@@ -79,17 +79,15 @@ pub fn partition_particles(model: &Model, nparts: usize) -> Vec<usize> {
 /// # Panics
 /// If `owner.len()` is not the number of vertices or an owner is `>= nparts`.
 pub fn imbalance(graph: &Graph, owner: &[usize], nparts: usize) -> f64 {
-    assert_eq!(owner.len(), graph.n_vertices(), "one owner per body");
-    let mut w = vec![0u64; nparts.max(1)];
-    for (&o, &v) in owner.iter().zip(&graph.vwgt) {
-        w[o] += v;
-    }
-    let total: u64 = w.iter().sum();
+    // partition::imbalance divides by the mean over all `nparts`
+    let nparts = nparts.max(1);
     let parts = nparts.min(graph.n_vertices()).max(1);
-    if total == 0 {
-        return 1.0;
+    let over_all = partition::imbalance(graph, owner, nparts);
+    if parts == nparts || graph.vwgt.iter().all(|&w| w == 0) {
+        over_all
+    } else {
+        over_all * parts as f64 / nparts as f64
     }
-    *w.iter().max().expect("nparts >= 1") as f64 / (total as f64 / parts as f64)
 }
 
 /// What [`rebalance`] decided, and the figures it decided on.
