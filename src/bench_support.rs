@@ -120,16 +120,12 @@ impl Fixture {
     }
 }
 
-/// The stiffness-like matrix of an `n × n` grid of elastic discs (E = 64 100 MPa, ν = 0.3) at a
-/// solid ratio of 0.78 (neighbours almost touch) in a 100 mm die, meshed at `mesh_size`, with
-/// every degree of freedom free:
-/// the element tangent at u = 0, plus "contact" springs (stiffness 0.1 × the mean diagonal,
-/// the pattern of a penalty contact tangent) joining every boundary node to the boundary nodes
-/// of other discs within 0.15 × the disc pitch (contact zones of a compacted packing), plus
-/// 1e-3 × the mean diagonal on the diagonal (a mass term; removes the rigid-body modes), so the
-/// matrix is symmetric positive definite.
-pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
-    let text = format!(
+/// Case text of an `n × n` grid of elastic aluminium discs (E = 64 100 MPa, ν = 0.3) at solid
+/// ratio `solid_ratio` in a square die of side `side` mm whose four walls move in at 10 mm/s,
+/// meshed at `mesh_size`, one time step of 0.1 s; `extra` is appended (further tables, such as
+/// `[contact]` or `[solver]`).
+pub fn disc_grid_case(n: usize, side: f64, solid_ratio: f64, mesh_size: f64, extra: &str) -> String {
+    format!(
         r#"title = "benchmark disc grid"
 [[materials]]
 name = "m"
@@ -141,7 +137,7 @@ material = "m"
 nx = {n}
 ny = {n}
 shape = "disc"
-solid_ratio = 0.78
+solid_ratio = {solid_ratio}
 mesh_size = {mesh_size}
 [time]
 end = 1.0
@@ -152,7 +148,7 @@ position = 0.0
 velocity = 10.0
 [[walls]]
 side = "right"
-position = 100.0
+position = {side}
 velocity = 10.0
 [[walls]]
 side = "bottom"
@@ -160,10 +156,22 @@ position = 0.0
 velocity = 10.0
 [[walls]]
 side = "top"
-position = 100.0
+position = {side}
 velocity = 10.0
-"#
-    );
+{extra}"#
+    )
+}
+
+/// The stiffness-like matrix of an `n × n` grid of elastic discs (E = 64 100 MPa, ν = 0.3) at a
+/// solid ratio of 0.78 (neighbours almost touch) in a 100 mm die, meshed at `mesh_size`, with
+/// every degree of freedom free:
+/// the element tangent at u = 0, plus "contact" springs (stiffness 0.1 × the mean diagonal,
+/// the pattern of a penalty contact tangent) joining every boundary node to the boundary nodes
+/// of other discs within 0.15 × the disc pitch (contact zones of a compacted packing), plus
+/// 1e-3 × the mean diagonal on the diagonal (a mass term; removes the rigid-body modes), so the
+/// matrix is symmetric positive definite.
+pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
+    let text = disc_grid_case(n, 100.0, 0.78, mesh_size, "");
     let case = crate::case::parse(&text, std::path::Path::new(".")).expect("benchmark case");
     let model = Model::from_case(&case).expect("benchmark model");
     let (eq, n_free) = number_equations(model.n_dofs(), std::iter::empty());
