@@ -177,19 +177,49 @@ pub fn resample_outline(vertices: &[[f64; 2]], max_side: f64) -> Vec<[f64; 2]> {
 /// [`MeshError`] for invalid input (see [`check_simple_polygon`]), `h` not positive and finite,
 /// or a failure of the triangulation.
 pub fn simple_polygon(vertices: &[[f64; 2]], h: f64) -> Result<Mesh, MeshError> {
+    simple_polygon_graded(vertices, h, h)
+}
+
+/// [`simple_polygon`] with the boundary at size `h` and the interior allowed to grow to size
+/// `h_interior` (≥ `h`): the largest triangle area is that of [`simple_polygon`] for
+/// `h_interior`, and the refinement's angle limit grades the triangles from the boundary
+/// sides inward. With `h_interior = h` this is [`simple_polygon`].
+///
+/// # Errors
+/// As [`simple_polygon`], and `h_interior` below `h` or not finite.
+pub fn simple_polygon_graded(vertices: &[[f64; 2]], h: f64, h_interior: f64) -> Result<Mesh, MeshError> {
+    polygon_mesh(vertices, h, h_interior, false)
+}
+
+/// [`simple_polygon`] whose refinement never splits a side of the (resampled) outline, so
+/// that the boundary nodes are the resampled outline points and the midpoints between them,
+/// and nothing else (the re-meshing of a deformed particle places those midpoints itself;
+/// see [`crate::remesh::remesh_particle_keeping`]). Next to a long side between short ones the
+/// triangles may then stay below the angle limit.
+///
+/// # Errors
+/// As [`simple_polygon`].
+pub fn simple_polygon_keeping_sides(vertices: &[[f64; 2]], h: f64) -> Result<Mesh, MeshError> {
+    polygon_mesh(vertices, h, h, true)
+}
+
+fn polygon_mesh(vertices: &[[f64; 2]], h: f64, h_interior: f64, keep_sides: bool) -> Result<Mesh, MeshError> {
     if !(h > 0.0 && h.is_finite()) {
         return Err(MeshError::InvalidSize(h));
+    }
+    if !(h_interior >= h && h_interior.is_finite()) {
+        return Err(MeshError::InvalidSize(h_interior));
     }
     let area = check_simple_polygon(vertices)?;
     let ccw: Vec<P> = if area > 0.0 { vertices.to_vec() } else { vertices.iter().rev().copied().collect() };
     let outline = resample_outline(&ccw, 2.0 * h);
-    let (nodes, triangles) = refined_triangulation(&outline, h)?;
+    let (nodes, triangles) = refined_triangulation(&outline, h_interior, keep_sides)?;
     Ok(triangles_to_quads(nodes, &triangles))
 }
 
 /// Constrained Delaunay triangulation of the counter-clockwise `outline`, refined to triangles
 /// of side about `2h`; returns the nodes used and the counter-clockwise triangles inside.
-fn refined_triangulation(outline: &[P], h: f64) -> Result<(Vec<P>, Vec<[usize; 3]>), MeshError> {
+fn refined_triangulation(outline: &[P], h: f64, keep_sides: bool) -> Result<(Vec<P>, Vec<[usize; 3]>), MeshError> {
     use spade::{AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation};
     let n = outline.len();
     let pts: Vec<Point2<f64>> = outline.iter().map(|p| Point2::new(p[0], p[1])).collect();
@@ -214,6 +244,7 @@ fn refined_triangulation(outline: &[P], h: f64) -> Result<(Vec<P>, Vec<[usize; 3
         .with_angle_limit(AngleLimit::from_deg(MIN_TRIANGLE_ANGLE_DEG))
         .with_max_allowed_area(max_area)
         .with_max_additional_vertices(budget);
+    let params = if keep_sides { params.keep_constraint_edges() } else { params };
     let result = cdt.refine(params);
     if !result.refinement_complete {
         tracing::warn!(

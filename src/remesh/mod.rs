@@ -119,6 +119,7 @@ pub mod monitor;
 pub mod state;
 pub mod transfer;
 
+use std::collections::HashMap;
 use crate::mesh::Mesh;
 use thiserror::Error;
 
@@ -306,20 +307,34 @@ pub fn remesh_particle(mesh: &Mesh, coords: &[[f64; 2]], h: f64) -> Result<Mesh,
 }
 
 /// [`remesh_particle`] with the boundary nodes `hold` (node numbers of `mesh`) and their
-/// neighbours along the boundary kept exactly where they are: the nodes in contact, whose positions set the penetrations and with them
-/// the contact forces (a penalty contact penetrates by p/ε, a fraction of a millimetre on the
-/// asphalt jobs; moving a contact face by the coarsening tolerance 0.05 `h` = 1.25 mm there
-/// changed the contact forces by 20 %).
+/// neighbours along the boundary kept exactly where they are: the nodes in contact, whose
+/// positions set the penetrations and with them the contact forces (a penalty contact
+/// penetrates by p/ε, a fraction of a millimetre on the asphalt jobs; moving a contact face by
+/// the coarsening tolerance 0.05 `h` = 1.25 mm there changed the contact forces by 20 %).
 ///
-/// The boundary is first coarsened to a spacing of about `2h` ([`coarsen_outline_keeping`]:
-/// corners, strongly curved stretches and held nodes keep their points), because the mesher
-/// adds the midpoint of every side; without it each re-mesh would double the boundary points.
-/// The coarsened polygon's free points are then offset along their vertex normals by the one
-/// distance that gives it the old area back ([`restore_area_keeping`]), so the particle's area
-/// is unchanged to round-off (1e-12) while its free boundary moves by at most the coarsening
-/// tolerance (0.05 `h`) plus that offset, and a held stretch not at all (the mesher's side
-/// midpoints between two held nodes lie on the old boundary). When every point is held, or the
-/// coarsened polygon is refused, the whole outline is meshed as it is.
+/// The mesher ([`crate::mesh::polygon::simple_polygon`]) splits triangles into quadrilaterals
+/// and so adds the midpoint of every side of the polygon it is given. The polygon is built so
+/// that the new boundary has about the old density, not twice it:
+/// 1. free stretches are coarsened to a spacing of about `2h` ([`coarsen_outline_keeping`]:
+///    corners, strongly curved stretches and held nodes keep their points); the coarsened
+///    polygon's free points are offset along their vertex normals by the one distance that
+///    gives the old area back ([`restore_area_keeping`]), so they move by at most the
+///    coarsening tolerance (0.05 `h`) plus that offset;
+/// 2. in runs of old points kept as they are (held, or on a curved stretch the coarsening left
+///    alone) every other point is dropped ([`thin_kept_runs`]) and the mesher's midpoint of the
+///    side that replaces it is moved back onto it ([`snap_midpoints`], with the points of a
+///    side the refinement split moved onto the two old sides); the mesh size at the boundary
+///    is raised to half the longest such side so that the mesher keeps them whole;
+/// 3. the interior nodes are smoothed ([`smooth_interior`]).
+///
+/// A held stretch thus keeps every old point, bit for bit, and no point is added between two
+/// of them (measured on an asphalt octagon of the 5.2.1 job held all round: 48 boundary nodes
+/// and 162 elements from 48 and 72; 96 and 588 before the thinning), and the particle's area
+/// is unchanged to round-off (1e-12). Should that fail (no free point left to restore the
+/// area with, a side the mesher split elsewhere than at its midpoint, a moved node that would
+/// invert an element, a polygon the mesher refuses), the old outline is thinned as a whole
+/// (every old point kept, at the old spacing), and as a last resort meshed as it is (every
+/// old point a vertex: twice the density).
 ///
 /// # Errors
 /// The checks of the other building blocks, a boundary with more or fewer than one loop, or a
@@ -338,23 +353,252 @@ pub fn remesh_particle_keeping(mesh: &Mesh, coords: &[[f64; 2]], h: f64, hold: &
     let hit: Vec<bool> = loops[0].iter().map(|n| held.contains(n)).collect();
     let keep: Vec<bool> = (0..m).map(|i| hit[i] || hit[(i + 1) % m] || hit[(i + m - 1) % m]).collect();
     let area = signed_area(&outline);
-    let kept = coarsen_outline_keeping(&outline, &keep, 2.0 * h, 0.05 * h, CORNER_DEG);
-    let coarse: Vec<[f64; 2]> = kept.iter().map(|&i| outline[i]).collect();
-    let fixed: Vec<bool> = kept.iter().map(|&i| keep[i]).collect();
-    let restored = restore_area_keeping(&coarse, &fixed, area);
-    let full = || crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()));
-    let Some(coarse) = restored else {
-        tracing::debug!("no free boundary point to restore the area with: meshing the full outline");
-        return full();
+    let full = || {
+        let mut new = crate::mesh::polygon::simple_polygon(&outline, h).map_err(|e| RemeshError::Mesher(e.to_string()))?;
+        smooth_interior(&mut new, SMOOTHING_SWEEPS);
+        Ok(new)
     };
-    match crate::mesh::polygon::simple_polygon(&coarse, h) {
-        Ok(m) => Ok(m),
-        Err(e) => {
-            // the coarse polygon may touch itself where the old one nearly did: mesh the old one
-            tracing::debug!(%e, "coarsened outline refused, meshing the full outline");
-            full()
+    // 1. the outline coarsened to about 2h, with every other held point left to the mesher's
+    //    side midpoints (the old density there); 2. should that fail (no free point left to
+    //    restore the area with, or the mesher splits a side in a way the midpoint cannot be put
+    //    back), every old point, every other one a polygon vertex (the old boundary exactly, at
+    //    its old spacing); 3. every old point a polygon vertex (the mesher's midpoints double
+    //    the boundary density).
+    let every: Vec<bool> = vec![true; m];
+    for attempt in 0..2 {
+        let (kept, pinned) = if attempt == 0 {
+            let kept = coarsen_outline_keeping(&outline, &keep, 2.0 * h, 0.05 * h, CORNER_DEG);
+            // a free point the coarsening kept together with both its neighbours (a curved
+            // stretch, finer than 2h only within the tolerance) is an old point on old sides:
+            // pinned too, so that it is thinned as the held ones are
+            let mut is_kept = vec![false; m];
+            kept.iter().for_each(|&i| is_kept[i] = true);
+            let pinned: Vec<bool> = (0..m).map(|i| keep[i] || (is_kept[i] && is_kept[(i + 1) % m] && is_kept[(i + m - 1) % m])).collect();
+            (kept, pinned)
+        } else {
+            ((0..m).collect(), every.clone())
+        };
+        let (kept, snaps) = thin_kept_runs(&outline, &pinned, &kept, THIN_MAX_SIDE * h);
+        let coarse: Vec<[f64; 2]> = kept.iter().map(|&i| outline[i]).collect();
+        let fixed: Vec<bool> = kept.iter().map(|&i| pinned[i]).collect();
+        // a point put back on the midpoint of side k adds the triangle (a, s, b) to the area
+        let snapped_area: f64 = snaps.iter().map(|&(k, i)| signed_area(&[coarse[k], outline[i], coarse[(k + 1) % coarse.len()]])).sum();
+        let Some(coarse) = restore_area_keeping(&coarse, &fixed, area - snapped_area) else {
+            tracing::debug!(attempt, "no free boundary point to restore the area with");
+            continue;
+        };
+        // the mesher resamples sides longer than twice its size: a side whose midpoint is to
+        // land on a dropped point stays whole (the boundary size is raised to half the longest
+        // of them, at most 1.5 h, and the interior follows it)
+        let longest = snaps.iter().map(|&(k, _)| {
+            let (a, b) = (coarse[k], coarse[(k + 1) % coarse.len()]);
+            (b[0] - a[0]).hypot(b[1] - a[1])
+        });
+        let hb = longest.fold(h, |hb, l| hb.max(0.5 * l * (1.0 + 1e-9)));
+        let mut new = match crate::mesh::polygon::simple_polygon_keeping_sides(&coarse, hb) {
+            Ok(m) => m,
+            Err(e) => {
+                // the coarse polygon may touch itself where the old one nearly did
+                tracing::debug!(%e, attempt, "outline refused by the mesher");
+                continue;
+            }
+        };
+        if snaps.is_empty() || snap_midpoints(&mut new, &coarse, &snaps.iter().map(|&(k, i)| (k, outline[i])).collect::<Vec<_>>()) {
+            smooth_interior(&mut new, SMOOTHING_SWEEPS);
+            return Ok(new);
+        }
+        tracing::debug!(attempt, "a side midpoint could not be put back on its old boundary point");
+    }
+    tracing::debug!("meshing the full outline");
+    full()
+}
+
+/// Longest side (in units of the target size h) that a dropped point of [`thin_kept_runs`]
+/// may leave: the old spacing is kept where it is up to 1.5 h; longer old sides are
+/// refined by the mesher.
+pub const THIN_MAX_SIDE: f64 = 3.0;
+
+/// Sweeps of [`smooth_interior`] given to a new particle mesh.
+pub const SMOOTHING_SWEEPS: usize = 8;
+
+/// Smart Laplacian smoothing of the interior nodes of `mesh` (the boundary is not touched, so
+/// neither is the area): in each of `sweeps` sweeps every interior node moves to the mean of
+/// its neighbours along element edges when that raises the smallest scaled Jacobian of the
+/// elements around it, and stays otherwise. The mesher's quadrilaterals (three per triangle)
+/// are kinked where triangles of different sizes meet, and a side midpoint put back on a
+/// dented boundary squeezes the elements next to it; the smoothing evens both out.
+pub fn smooth_interior(mesh: &mut Mesh, sweeps: usize) {
+    use crate::mesh::quality::scaled_jacobian;
+    let n = mesh.n_nodes();
+    let mut on_boundary = vec![false; n];
+    for e in &mesh.boundary {
+        on_boundary[e[0]] = true;
+        on_boundary[e[1]] = true;
+    }
+    let mut around: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (e, el) in mesh.elements.iter().enumerate() {
+        for c in 0..4 {
+            let (v, w) = (el[c], el[(c + 1) % 4]);
+            around[v].push(e);
+            if !neighbours[v].contains(&w) {
+                neighbours[v].push(w);
+            }
+            if !neighbours[w].contains(&v) {
+                neighbours[w].push(v);
+            }
         }
     }
+    let worst = |nodes: &[[f64; 2]], els: &[usize]| els.iter().map(|&e| scaled_jacobian(mesh.elements[e].map(|v| nodes[v]))).fold(f64::INFINITY, f64::min);
+    let mut nodes = mesh.nodes.clone();
+    for _ in 0..sweeps {
+        let mut moved = false;
+        for v in 0..n {
+            if on_boundary[v] || neighbours[v].is_empty() {
+                continue;
+            }
+            let k = neighbours[v].len() as f64;
+            let mean = neighbours[v].iter().fold([0.0, 0.0], |m, &w| [m[0] + nodes[w][0] / k, m[1] + nodes[w][1] / k]);
+            let before = worst(&nodes, &around[v]);
+            let old = nodes[v];
+            nodes[v] = mean;
+            if worst(&nodes, &around[v]) > before {
+                moved = true;
+            } else {
+                nodes[v] = old;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    mesh.nodes = nodes;
+}
+
+/// Thins the runs of held points in `kept` (indices into the closed outline `p`, in order):
+/// of three kept points that are neighbours on the outline and all held (`keep`), the middle
+/// one is dropped when the side that replaces it is at most `max_side` long and the point lies
+/// near the middle of that side (projection within its middle half, at most a quarter of the
+/// side off it); alternately, so that no two dropped points are neighbours. The mesher puts a
+/// midpoint on every side, and [`snap_midpoints`] moves it onto the dropped point: the held
+/// stretch keeps every old point, exactly where it was, and its old spacing (not half of it).
+/// Returns the thinned indices and, for each dropped point, `(k, i)`: side k of the thinned
+/// polygon (from its point k to k + 1) takes outline point i.
+fn thin_kept_runs(p: &[[f64; 2]], keep: &[bool], kept: &[usize], max_side: f64) -> (Vec<usize>, Vec<(usize, usize)>) {
+    let (n, m) = (p.len(), kept.len());
+    let mut drop = vec![false; m];
+    if m >= 6 {
+        let next = |i: usize| (i + 1) % n;
+        let droppable = |k: usize| {
+            let (a, i, b) = (kept[(k + m - 1) % m], kept[k], kept[(k + 1) % m]);
+            if !(keep[a] && keep[i] && keep[b] && next(a) == i && next(i) == b) {
+                return false;
+            }
+            let (pa, pi, pb) = (p[a], p[i], p[b]);
+            let d = [pb[0] - pa[0], pb[1] - pa[1]];
+            let l2 = d[0] * d[0] + d[1] * d[1];
+            if !(l2 > 0.0) || l2.sqrt() > max_side {
+                return false;
+            }
+            let r = [pi[0] - pa[0], pi[1] - pa[1]];
+            let t = (r[0] * d[0] + r[1] * d[1]) / l2;
+            let off = (r[0] * d[1] - r[1] * d[0]).abs() / l2;
+            (0.25..=0.75).contains(&t) && off <= 0.25
+        };
+        for k in 0..m {
+            let prev_dropped = drop[(k + m - 1) % m];
+            let next_dropped = k + 1 == m && drop[0];
+            if !prev_dropped && !next_dropped && droppable(k) {
+                drop[k] = true;
+            }
+        }
+        if drop.iter().filter(|&&d| !d).count() < 4 {
+            drop.fill(false);
+        }
+    }
+    let mut thinned = Vec::with_capacity(m);
+    let mut snaps = Vec::new();
+    for k in 0..m {
+        if drop[k] {
+            // side from the last kept point; the first point of the polygon is never dropped
+            // after a dropped last one (see above), so `thinned` is not empty unless k = 0
+            snaps.push((thinned.len().wrapping_sub(1), kept[k]));
+        } else {
+            thinned.push(kept[k]);
+        }
+    }
+    let t = thinned.len();
+    for s in &mut snaps {
+        // a point dropped at k = 0 lies on the closing side (from the last point to the first)
+        if s.0 == usize::MAX {
+            s.0 = t - 1;
+        }
+    }
+    (thinned, snaps)
+}
+
+/// Puts the dropped point `s` of each side `k` of `polygon` (from `polygon[k]` = a to
+/// `polygon[k + 1]` = b) back on the boundary of `mesh`: the boundary nodes between a and b,
+/// all on the chord a–b, are moved by their chord parameter t onto the old outline a–s–b
+/// (t ≤ ½ onto a–s, the rest onto s–b), so the mesher's midpoint (t = ½) lands on s, and
+/// the further points of a side the refinement split land on the old sides a–s and s–b.
+/// False, with `mesh` unchanged, when a side has no node at its midpoint, or a moved node
+/// would turn one of its elements inside out.
+fn snap_midpoints(mesh: &mut Mesh, polygon: &[[f64; 2]], snaps: &[(usize, [f64; 2])]) -> bool {
+    let loops = mesh.boundary_loops();
+    if loops.len() != 1 {
+        return false;
+    }
+    let lp = &loops[0];
+    let at: HashMap<[u64; 2], usize> = lp.iter().enumerate().map(|(pos, &v)| (mesh.nodes[v].map(f64::to_bits), pos)).collect();
+    let nl = lp.len();
+    let mut moved = mesh.nodes.clone();
+    let mut touched = Vec::new();
+    for &(k, s) in snaps {
+        let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+        let (Some(&pa), Some(&pb)) = (at.get(&a.map(f64::to_bits)), at.get(&b.map(f64::to_bits))) else {
+            tracing::debug!(side = k, "snap: a side's end is not a boundary node of the new mesh");
+            return false;
+        };
+        // the nodes strictly between a and b, going the short way round the loop
+        let (fwd, bwd) = ((pb + nl - pa) % nl, (pa + nl - pb) % nl);
+        let between: Vec<usize> = if fwd <= bwd { (1..fwd).map(|i| lp[(pa + i) % nl]).collect() } else { (1..bwd).map(|i| lp[(pa + nl - i) % nl]).collect() };
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l2 = d[0] * d[0] + d[1] * d[1];
+        let mut hit_mid = false;
+        for &v in &between {
+            let p = mesh.nodes[v];
+            let t = ((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2;
+            moved[v] = if (t - 0.5).abs() <= 1e-9 {
+                hit_mid = true;
+                s
+            } else if t < 0.5 {
+                let u = 2.0 * t;
+                [a[0] + u * (s[0] - a[0]), a[1] + u * (s[1] - a[1])]
+            } else {
+                let u = 2.0 * t - 1.0;
+                [s[0] + u * (b[0] - s[0]), s[1] + u * (b[1] - s[1])]
+            };
+            touched.push(v);
+        }
+        if !hit_mid {
+            tracing::debug!(side = k, nodes = between.len(), "snap: no node at the side's midpoint");
+            return false;
+        }
+    }
+    let touched: std::collections::HashSet<usize> = touched.into_iter().collect();
+    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    for el in &mesh.elements {
+        if el.iter().any(|v| touched.contains(v)) {
+            let q = el.map(|v| moved[v]);
+            if (0..4).any(|c| orient(q[c], q[(c + 1) % 4], q[(c + 3) % 4]) <= 0.0) {
+                tracing::debug!("snap: a moved node turns an element inside out");
+                return false;
+            }
+        }
+    }
+    mesh.nodes = moved;
+    true
 }
 
 /// A boundary point whose sides turn by more than this (degrees) is a corner, always kept by
@@ -459,7 +703,8 @@ pub fn restore_area_keeping(p: &[[f64; 2]], fixed: &[bool], area: f64) -> Option
     let n = p.len();
     let a0 = signed_area(p);
     let deficit = area - a0;
-    if n < 3 || deficit == 0.0 {
+    // a deficit of round-off (a polygon that already has the area) needs no point to move
+    if n < 3 || deficit.abs() <= 1e-13 * area.abs() {
         return Some(p.to_vec());
     }
     // outward normal of side i (p_i → p_{i+1}) of a counter-clockwise polygon is (dy, −dx)/l;
