@@ -40,9 +40,9 @@
 //! element when its mesh is already near the limits; then
 //! [`crate::solver::Simulation::equilibrate`] balances the transferred state in place
 //! (Δt = 0: 6 Newton iterations in the mid-run test). The history's `remeshes` column counts
-//! them; results.h5 writes each step's own mesh. Still missing: contact history (stick points,
-//! multipliers) and a boundary resampling that does not add the midpoints of the kept boundary
-//! edges at every re-mesh (see the closing notes of the re-meshing issue).
+//! them; results.h5 writes each step's own mesh. The new boundary keeps the old points of the
+//! contact zones at their old spacing ([`remesh_particle_keeping`]). Still missing: contact
+//! history (stick points, multipliers), which starts afresh after a re-mesh.
 //!
 //! The list of what a re-mesh carries over, item by item:
 //! At a re-mesh of body b at the end of a committed step (the solver is not modified by this
