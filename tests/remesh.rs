@@ -197,6 +197,19 @@ fn nonuniform_state_transfer_converges() {
     assert!(wrong.0 > 0.5, "without the push-forward the stress is wrong by O(1): {wrong:?}");
 }
 
+/// The nodes of `mesh` with a dent (points near x = +10 pushed in by up to 3 mm, smoothly, as
+/// a neighbour's corner would) and then the linear map `a` (rows).
+fn dented(mesh: &Mesh, a: [[f64; 2]; 2]) -> Vec<[f64; 2]> {
+    mesh.nodes
+        .iter()
+        .map(|p| {
+            let push = 3.0 * (-(p[1] / 3.0).powi(2)).exp() * (p[0] / 10.0).max(0.0).powi(4);
+            let q = [p[0] - push, p[1]];
+            [a[0][0] * q[0] + a[0][1] * q[1], a[1][0] * q[0] + a[1][1] * q[1]]
+        })
+        .collect()
+}
+
 /// `remesh::remesh_particle` on a disc deformed into a non-convex, badly distorted shape (a
 /// dent pushed into one side, as a neighbour's corner would, then sheared by 2.5 and squashed
 /// to 0.6 of its height): the monitor asks for a new mesh;
@@ -210,15 +223,8 @@ fn nonuniform_state_transfer_converges() {
 #[test]
 fn remesh_particle_keeps_boundary_and_area_and_passes_the_monitor() {
     let old = shapes::disc([0.0, 0.0], 10.0, 1.5);
-    // a dent (points near x = +10 pushed in by up to 3 mm, smoothly) and a shear of 2.5
-    let x: Vec<[f64; 2]> = old
-        .nodes
-        .iter()
-        .map(|p| {
-            let push = 3.0 * (-(p[1] / 3.0).powi(2)).exp() * (p[0] / 10.0).max(0.0).powi(4);
-            [p[0] - push + 2.5 * p[1], 0.6 * p[1]]
-        })
-        .collect();
+    // a dent, a shear of 2.5 and a squash to 0.6
+    let x = dented(&old, [[1.0, 2.5], [0.0, 0.6]]);
     let limits = QualityLimits::default();
     let before = remesh::check_quality(&old, &x, &limits).unwrap();
     assert!(before.needs_remesh, "the deformation must cross a limit: {before:?}");
@@ -471,14 +477,7 @@ fn a_run_with_remeshing_keeps_volume_and_writes_each_mesh() {
 #[test]
 fn held_boundary_nodes_keep_their_places_and_their_spacing() {
     let old = shapes::disc([0.0, 0.0], 10.0, 1.5);
-    let x: Vec<[f64; 2]> = old
-        .nodes
-        .iter()
-        .map(|p| {
-            let push = 3.0 * (-(p[1] / 3.0).powi(2)).exp() * (p[0] / 10.0).max(0.0).powi(4);
-            [0.9 * p[0] - push + 0.3 * p[1], 1.05 * p[1]]
-        })
-        .collect();
+    let x = dented(&old, [[0.9, 0.3], [0.0, 1.05]]);
     let lp = &old.boundary_loops()[0];
     let limits = QualityLimits::default();
     let bits = |p: [f64; 2]| p.map(f64::to_bits);
