@@ -177,18 +177,7 @@ pub fn resample_outline(vertices: &[[f64; 2]], max_side: f64) -> Vec<[f64; 2]> {
 /// [`MeshError`] for invalid input (see [`check_simple_polygon`]), `h` not positive and finite,
 /// or a failure of the triangulation.
 pub fn simple_polygon(vertices: &[[f64; 2]], h: f64) -> Result<Mesh, MeshError> {
-    simple_polygon_graded(vertices, h, h)
-}
-
-/// [`simple_polygon`] with the boundary at size `h` and the interior allowed to grow to size
-/// `h_interior` (≥ `h`): the largest triangle area is that of [`simple_polygon`] for
-/// `h_interior`, and the refinement's angle limit grades the triangles from the boundary
-/// sides inward. With `h_interior = h` this is [`simple_polygon`].
-///
-/// # Errors
-/// As [`simple_polygon`], and `h_interior` below `h` or not finite.
-pub fn simple_polygon_graded(vertices: &[[f64; 2]], h: f64, h_interior: f64) -> Result<Mesh, MeshError> {
-    polygon_mesh(vertices, h, h_interior, false)
+    polygon_mesh(vertices, h, false)
 }
 
 /// [`simple_polygon`] whose refinement never splits a side of the (resampled) outline, so
@@ -200,20 +189,17 @@ pub fn simple_polygon_graded(vertices: &[[f64; 2]], h: f64, h_interior: f64) -> 
 /// # Errors
 /// As [`simple_polygon`].
 pub fn simple_polygon_keeping_sides(vertices: &[[f64; 2]], h: f64) -> Result<Mesh, MeshError> {
-    polygon_mesh(vertices, h, h, true)
+    polygon_mesh(vertices, h, true)
 }
 
-fn polygon_mesh(vertices: &[[f64; 2]], h: f64, h_interior: f64, keep_sides: bool) -> Result<Mesh, MeshError> {
+fn polygon_mesh(vertices: &[[f64; 2]], h: f64, keep_sides: bool) -> Result<Mesh, MeshError> {
     if !(h > 0.0 && h.is_finite()) {
         return Err(MeshError::InvalidSize(h));
-    }
-    if !(h_interior >= h && h_interior.is_finite()) {
-        return Err(MeshError::InvalidSize(h_interior));
     }
     let area = check_simple_polygon(vertices)?;
     let ccw: Vec<P> = if area > 0.0 { vertices.to_vec() } else { vertices.iter().rev().copied().collect() };
     let outline = resample_outline(&ccw, 2.0 * h);
-    let (nodes, triangles) = refined_triangulation(&outline, h_interior, keep_sides)?;
+    let (nodes, triangles) = refined_triangulation(&outline, h, keep_sides)?;
     Ok(triangles_to_quads(nodes, &triangles))
 }
 
