@@ -26,6 +26,7 @@ use crate::material::{ConstitutiveLaw, TimeIncrement};
 use crate::model::Model;
 use crate::parallel::{Collective, Distribution, PartitionStats, Serial};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
@@ -648,8 +649,9 @@ impl Simulation {
     /// volume ratios and element pressures are transferred ([`crate::remesh::transfer_body`]).
     /// Everything else is rebuilt for the new numbering; the other bodies keep their solution.
     /// The run's counters, energies and initial areas (for the volume error) are kept.
-    /// Contact history is not carried over: frictionless penalty contact has none, the
-    /// augmented-Lagrangian multipliers start again at the next step, stick points are lost.
+    /// The contact history of every pair (stick anchors, augmented-Lagrangian and Lagrange
+    /// multipliers, wall histories) and the tributary lengths of the kept contact zones are
+    /// carried to the new numbering ([`ContactProblem::carry_history`]).
     ///
     /// # Errors
     /// [`SolveError::Remesh`] for an implicit dynamic analysis (velocities and accelerations
@@ -709,6 +711,11 @@ impl Simulation {
         if incompressible {
             moved.state.j0.iter_mut().for_each(|j| *j = 1.0);
         }
+        // the old boundary nodes the new mesh keeps where they are, bit for bit (the held
+        // contact zones): old node of the body → its number in the new mesh
+        let bits = |p: [f64; 2]| p.map(f64::to_bits);
+        let new_boundary: HashMap<[u64; 2], usize> = new_mesh.boundary.iter().flatten().map(|&k| (bits(new_mesh.nodes[k]), k)).collect();
+        let kept: Vec<Option<usize>> = xb.iter().map(|&p| new_boundary.get(&bits(p)).copied()).collect();
         let model = self.model.with_body_mesh(b, new_mesh).map_err(|e| fail(e.to_string()))?;
         // the owners are kept unless the new element counts unbalance them too much
         let owners = self.par.as_ref().map(|p| p.body_owner.as_slice());
@@ -739,8 +746,19 @@ impl Simulation {
         // the default contact penalty 10 E/h is a property of the particle, not of its current
         // mesh: the finer new mesh would otherwise stiffen every contact of the body at once
         // (measured: 1.9 times on an asphalt octagon, a relative residual of 1.0 to re-balance)
+        let x_new = next.coords(&next.sol.u);
         if let (Some(old), Some(new)) = (self.contact.as_ref(), next.contact.as_mut()) {
             new.body_h.clone_from(&old.body_h);
+            // the contact history of the whole assembly (stick anchors, multipliers, wall
+            // histories) goes to the new numbering, not only the re-meshed body's
+            let mut node_map = vec![None; self.model.x0.len()];
+            for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
+                for k in 0..ob.mesh.n_nodes() {
+                    node_map[ob.node_offset + k] = if c == b { kept[k].map(|m| nb.node_offset + m) } else { Some(nb.node_offset + k) };
+                }
+            }
+            let carried = new.carry_history(old, &node_map, [&self.model.x0, &x], [&next.model.x0, &x_new]);
+            tracing::debug!(body = b, ?carried, "contact history carried over the re-mesh");
         }
         next.sol.time = self.sol.time;
         next.dt_prev = self.dt_prev;

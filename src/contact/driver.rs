@@ -134,6 +134,24 @@ impl NodalContact {
     }
 }
 
+/// What [`ContactProblem::carry_history`] carried over a re-mesh (counts).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CarriedHistory {
+    /// Active node-to-segment histories carried unchanged (slave node and master segment kept).
+    pub kept: usize,
+    /// Active node-to-segment histories whose master segment was re-meshed: the anchor moved
+    /// onto the new boundary at the same point.
+    pub moved: usize,
+    /// Active node-to-segment histories dropped (their slave node is not in the new mesh).
+    pub dropped: usize,
+    /// Active node-to-wall histories carried.
+    pub walls: usize,
+    /// Committed Lagrange multipliers carried.
+    pub multipliers: usize,
+    /// Slave nodes whose tributary length took the old reference lengths of kept segments.
+    pub areas: usize,
+}
+
 /// The committed contact state of a [`ContactProblem`] (global node and segment numbers), see
 /// [`ContactProblem::state`].
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -375,12 +393,31 @@ impl ContactProblem {
 
     /// Projection parameter ξ of `node` on segment `seg` (straight or smoothed).
     fn xi_of(&self, node: usize, seg: usize, x: &[[f64; 2]]) -> f64 {
+        self.xi_at(x[node], seg, x)
+    }
+
+    /// Projection parameter ξ of the point `p` on segment `seg` (straight or smoothed; the
+    /// straight projection, extrapolated beyond the ends, where the smoothed one has none).
+    fn xi_at(&self, p: [f64; 2], seg: usize, x: &[[f64; 2]]) -> f64 {
         let s = self.segments[seg];
-        let straight = || kernels::nts_project(x[node], x[s.nodes[0]], x[s.nodes[1]]).xi;
+        let straight = || kernels::nts_project(p, x[s.nodes[0]], x[s.nodes[1]]).xi;
         if self.smoothed() {
-            smooth::smooth_project(x[node], &self.master(seg, x)).map_or_else(straight, |g| g.xi)
+            smooth::smooth_project(p, &self.master(seg, x)).map_or_else(straight, |g| g.xi)
         } else {
             straight()
+        }
+    }
+
+    /// The point of segment `seg` at parameter ξ on configuration `x` (on the smoothed surface
+    /// when `normal = "smoothed"`, else on the chord).
+    fn point_at(&self, seg: usize, xi: f64, x: &[[f64; 2]]) -> [f64; 2] {
+        let s = self.segments[seg];
+        let (a, b) = (x[s.nodes[0]], x[s.nodes[1]]);
+        let chord = [(1.0 - xi) * a[0] + xi * b[0], (1.0 - xi) * a[1] + xi * b[1]];
+        if self.smoothed() {
+            smooth::smooth_point(&self.master(seg, x), xi).unwrap_or(chord)
+        } else {
+            chord
         }
     }
 
@@ -1023,6 +1060,143 @@ impl ContactProblem {
         self.nodal = s.nodal;
         self.body_h = s.body_h;
         Ok(())
+    }
+
+    /// Carry the committed contact state of `old` — the contact problem of the same model
+    /// before one or more particles were re-meshed — over to this one (built for the model
+    /// with the new meshes), so that a re-mesh does not reset the contact of the whole
+    /// assembly. `node_map[n]` is the new global number of old node `n` (`None` for a node of
+    /// a re-meshed particle that is not in its new mesh); `x_old`, `x0_old` are the current
+    /// and reference coordinates of the old model, `x`, `x0` those of the new one.
+    ///
+    /// What moves, and how:
+    /// - a node-to-segment history (stick anchor ξ_a, multipliers λ_N, λ_T) whose slave node
+    ///   and both master nodes are in the new model, and whose master segment is one of its
+    ///   segments, is carried unchanged: every pair between particles that were not
+    ///   re-meshed, and the pairs of a re-meshed particle's contact zones (the re-mesh keeps
+    ///   their nodes and spacing, see [`crate::remesh::remesh_particle_keeping`]);
+    /// - an active history whose master segment was re-meshed away keeps its anchor as a
+    ///   point: x_a = c(ξ_a) on the old segment (configuration `x_old`), re-projected onto the
+    ///   new segment of the same body nearest to the slave node, so that the elastic slip
+    ///   g_T = (ξ − ξ_a) ℓ measures the same distance;
+    /// - node-to-wall histories (their anchors are wall coordinates) and committed Lagrange
+    ///   multipliers follow their slave nodes;
+    /// - the tributary length of a slave node (the contact force is p × length) takes the old
+    ///   reference length of each of its boundary segments that the new mesh kept, so that a
+    ///   contact zone carries the same forces after the re-mesh (the re-meshed particle's new
+    ///   reference is its current shape, whose lengths differ by the boundary's stretch);
+    /// - the nodal results of the last committed step follow their nodes (new nodes: none).
+    ///
+    /// A history whose slave node has no counterpart is dropped; the re-mesh holds every node
+    /// in contact, so only inactive histories are lost in practice ([`CarriedHistory`] counts
+    /// them).
+    pub fn carry_history(&mut self, old: &ContactProblem, node_map: &[Option<usize>], [x0_old, x_old]: [&[[f64; 2]]; 2], [x0, x]: [&[[f64; 2]]; 2]) -> CarriedHistory {
+        let mut out = CarriedHistory::default();
+        let seg_of: HashMap<[usize; 2], usize> = self.segments.iter().enumerate().map(|(k, s)| (s.nodes, k)).collect();
+        let slave_of: HashMap<usize, usize> = self.slaves.iter().enumerate().map(|(i, (n, _))| (*n, i)).collect();
+        let map = |n: usize| node_map.get(n).copied().flatten();
+        let kept_segment = |k: usize| -> Option<usize> {
+            let [a, b] = old.segments[k].nodes;
+            seg_of.get(&[map(a)?, map(b)?]).copied()
+        };
+        // node-to-segment histories, in sorted order (a collision keeps the first)
+        let mut nts: Vec<(&(usize, usize), &PairHistory)> = old.nts_hist.iter().collect();
+        nts.sort_by_key(|(k, _)| **k);
+        let mut next: HashMap<(usize, usize), PairHistory> = HashMap::with_capacity(nts.len());
+        for (&(slave, seg), h) in nts {
+            let Some(s_new) = map(slave) else {
+                out.dropped += usize::from(h.active);
+                continue;
+            };
+            if let Some(k) = kept_segment(seg) {
+                next.entry((s_new, k)).or_insert(*h);
+                out.kept += usize::from(h.active);
+                continue;
+            }
+            if !h.active {
+                continue;
+            }
+            // the anchor as a point, onto the nearest new segment of the master body
+            let body = old.segments[seg].body;
+            let anchor = old.point_at(seg, h.xi_stick, x_old);
+            let nearest = self
+                .segments
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.body == body)
+                .map(|(k, s)| (super::search::point_segment_distance(x[s_new], x[s.nodes[0]], x[s.nodes[1]]), k))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((_, k)) = nearest else {
+                out.dropped += 1;
+                continue;
+            };
+            let xi_stick = self.xi_at(anchor, k, x);
+            next.entry((s_new, k)).or_insert(PairHistory { xi_stick, ..*h });
+            out.moved += 1;
+        }
+        self.nts_hist = next;
+        // node-to-wall histories and nodal results follow the slave nodes
+        let n_new = x.len();
+        let mut nodal = NodalContact::default();
+        nodal.reset(n_new, self.walls.len());
+        for (i, &(n, _)) in old.slaves.iter().enumerate() {
+            let Some(j) = map(n).and_then(|m| slave_of.get(&m).copied()) else { continue };
+            for w in 0..self.wall_hist.len().min(old.wall_hist.len()) {
+                self.wall_hist[w][j] = old.wall_hist[w][i];
+                out.walls += usize::from(old.wall_hist[w][i].active);
+            }
+        }
+        self.trial_wall.clone_from(&self.wall_hist);
+        self.aug_wall.clone_from(&self.wall_hist);
+        for (n, m) in node_map.iter().enumerate() {
+            let Some(m) = *m else { continue };
+            if n >= old.nodal.pressure.len() || m >= n_new {
+                continue;
+            }
+            nodal.pressure[m] = old.nodal.pressure[n];
+            nodal.gap[m] = old.nodal.gap[n];
+            nodal.status[m] = old.nodal.status[n];
+            nodal.force[m] = old.nodal.force[n];
+            for (w, f) in old.nodal.wall_force.iter().enumerate().take(nodal.wall_force.len()) {
+                nodal.wall_force[w][m] = f[n];
+            }
+        }
+        self.nodal = nodal;
+        // committed Lagrange multipliers: (0, slave node, segment) and (1, wall, slave index)
+        let mut lm = HashMap::with_capacity(old.lm.committed.len());
+        let mut keys: Vec<(&(u8, usize, usize), &f64)> = old.lm.committed.iter().collect();
+        keys.sort_by_key(|(k, _)| **k);
+        for (&(kind, a, b), &l) in keys {
+            let key = match kind {
+                0 => map(a).zip(kept_segment(b)).map(|(s, k)| (0, s, k)),
+                _ => old.slaves.get(b).and_then(|&(n, _)| map(n)).and_then(|m| slave_of.get(&m)).map(|&j| (1, a, j)),
+            };
+            if let Some(key) = key {
+                lm.entry(key).or_insert(l);
+                out.multipliers += 1;
+            }
+        }
+        self.lm.committed = lm;
+        // tributary lengths: the old reference length of every boundary segment kept
+        let len = |p: [f64; 2], q: [f64; 2]| ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+        let mut changed = vec![false; self.slaves.len()];
+        for (k, s) in old.segments.iter().enumerate() {
+            let Some(knew) = kept_segment(k) else { continue };
+            let [a, b] = s.nodes;
+            let [an, bn] = self.segments[knew].nodes;
+            let delta = 0.5 * (len(x0_old[a], x0_old[b]) - len(x0[an], x0[bn]));
+            if delta == 0.0 {
+                continue;
+            }
+            for n in [an, bn] {
+                if let Some(&j) = slave_of.get(&n) {
+                    self.area[j] += delta;
+                    changed[j] = true;
+                }
+            }
+        }
+        out.areas = changed.iter().filter(|&&c| c).count();
+        out
     }
 
     /// Contact kind used between particles.

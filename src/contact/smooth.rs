@@ -500,6 +500,14 @@ pub fn smooth_project(xs: [f64; 2], m: &Master) -> Option<SmoothGeometry> {
     Some(SmoothGeometry { xi, gap: dot(sub(xs, c), n), normal: n, length: curve.l })
 }
 
+/// The point c(ξ) of the smoothed master `m` (f64; the cubic, also outside [0, 1]). `None` for
+/// a degenerate segment.
+pub fn smooth_point(m: &Master, xi: f64) -> Option<[f64; 2]> {
+    let (th, _) = end_angles(m);
+    let curve = Curve::<f64>::new(m.x1, m.x2, th)?;
+    Some(curve.eval(xi)[0])
+}
+
 /// Output of [`nts_smooth_pair`]. Dofs `[s_x, s_y, 1_x, 1_y, 2_x, 2_y, 0_x, 0_y, 3_x, 3_y]`
 /// (the entries of an absent neighbour are zero).
 #[derive(Clone, Copy, Debug, PartialEq)]
