@@ -8,7 +8,8 @@ re-equilibrations), the largest volume error, and the final wall pressures.
 
     python3 scripts/remesh_jobs.py [--out results/remesh] [--jobs 2] [--only NAME ...] [--no-run]
 
-It runs `target/release/mpfem` (build it first: `cargo build --release`), two jobs at a time
+It runs `target/release/mpfem` (build it first: `cargo build --release`; the environment variable
+MPFEM names another binary, e.g. a copy kept while the tree is rebuilt), two jobs at a time
 by default; `--no-run` only prints the table from an earlier run's results. Each job's case
 (with `[remesh]`), log, and results are in OUT/NAME. Units: mm, N, MPa, s.
 """
@@ -84,9 +85,9 @@ def main():
             sys.exit(f"--only: no job {unknown}; the jobs are {sorted(todo)}")
         todo = {n: todo[n] for n in a.only}
     if not a.no_run:
-        exe = ROOT / "target" / "release" / "mpfem"
+        exe = pathlib.Path(os.environ.get("MPFEM", ROOT / "target" / "release" / "mpfem"))
         if not exe.exists():
-            sys.exit(f"{exe} not found: run `cargo build --release` first")
+            sys.exit(f"{exe} not found: run `cargo build --release` first (or set MPFEM to a binary)")
         with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
             for name, rc in pool.map(lambda kv: run(kv[0], kv[1], out_dir, exe), todo.items()):
                 print(f"{name}: exit {rc}", file=sys.stderr)

@@ -58,7 +58,7 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         elements: mesh.elements.clone(),
         elem_material: vec![0; ne],
         elem_body: vec![0; ne],
-        bodies: vec![crate::model::Body { name: "block".into(), mesh, material: 0, node_offset: 0, elem_offset: 0, mesh_size: 1.0 }],
+        bodies: vec![crate::model::Body { name: "block".into(), contact_h: crate::model::Body::mean_element_size(&mesh), mesh, material: 0, node_offset: 0, elem_offset: 0, mesh_size: 1.0 }],
         prescribed: bottom
             .iter()
             .flat_map(|&n| [2 * n, 2 * n + 1])

@@ -637,6 +637,13 @@ impl Simulation {
         self.last_report.as_ref()
     }
 
+    /// The stabilisation spring of every dof when it acts, ζ E a / h² (N/mm², before the
+    /// `stiffen_on_cutback` factor; zero without contact): h is the particle's
+    /// [`crate::model::Body::contact_h`], so a re-mesh does not change a particle's total.
+    pub fn stabilisation_springs(&self) -> &[f64] {
+        &self.stab_base
+    }
+
     pub fn n_free(&self) -> usize {
         self.assembler.n_free
     }
@@ -743,12 +750,10 @@ impl Simulation {
             next.sol.j0[dst..dst + n].copy_from_slice(&self.sol.j0[src..src + n]);
             next.sol.lambda[dst..dst + n].copy_from_slice(&self.sol.lambda[src..src + n]);
         }
-        // the default contact penalty 10 E/h is a property of the particle, not of its current
-        // mesh: the finer new mesh would otherwise stiffen every contact of the body at once
-        // (measured: 1.9 times on an asphalt octagon, a relative residual of 1.0 to re-balance)
+        // (the default contact penalty 10 E/h and the stabilisation springs ζ E a/h² keep the
+        // particle's own h, `Body::contact_h`, which `with_body_mesh` keeps)
         let x_new = next.coords(&next.sol.u);
         if let (Some(old), Some(new)) = (self.contact.as_ref(), next.contact.as_mut()) {
-            new.body_h.clone_from(&old.body_h);
             // the contact history of the whole assembly (stick anchors, multipliers, wall
             // histories) goes to the new numbering, not only the re-meshed body's
             let mut node_map = vec![None; self.model.x0.len()];

@@ -326,7 +326,9 @@ fn model_with_a_remeshed_body() {
 /// `Simulation::remesh_body` in the middle of a compaction: two copies of the 2 × 2 lateral disc
 /// job (J2 aluminium, penalty contact), at mesh size 2 mm, run to solid ratio 0.85
 /// identically; one re-meshes a disc at the same size. The particle areas are unchanged
-/// (1e-12); the transferred state re-converges in place (`Simulation::equilibrate`, Δt = 0)
+/// (1e-12), and the disc's total stabilisation spring ζ E A / h² changes only with the
+/// reference area A (1e-9: h is the particle's, not the new mesh's, whose smaller h made the
+/// springs stiffer by the ratio of the element counts before); the transferred state re-converges in place (`Simulation::equilibrate`, Δt = 0)
 /// in at most 8 Newton iterations (measured 6: the nodes in contact keep their positions;
 /// 10 when the coarsening's area-restoring offset still moved them), and after one more step
 /// (dt = 0.01 s) the wall forces of the two agree to the 1 % (measured 0.54 % and
@@ -354,8 +356,19 @@ fn remeshing_a_disc_mid_run_keeps_the_wall_forces() {
         phi = ra.compaction.unwrap().solid_ratio;
     }
     let areas_before = b.model.body_areas(&b.coords(&b.sol.u));
+    // the disc's stabilisation springs, summed: ζ E A / h² per direction with the particle's
+    // own h, whatever its mesh (they were stiffened by the finer new mesh before)
+    let springs = |s: &Simulation| {
+        let body = &s.model.bodies[0];
+        s.stabilisation_springs()[2 * body.node_offset..2 * (body.node_offset + body.mesh.n_nodes())].iter().sum::<f64>()
+    };
+    let springs_before = springs(&b);
+    // (the springs go with the reference area: the original disc's before, its current area after)
+    let area_ratio = areas_before[0] / b.model.body_areas(&b.model.x0)[0];
     let h = c.bodies[0].mesh_size;
     let moved = b.remesh_body(0, h).unwrap();
+    let springs_after = springs(&b);
+    assert!(springs_before > 0.0 && (springs_after / springs_before / area_ratio - 1.0).abs() < 1e-9, "stabilisation springs {springs_before} -> {springs_after} (area ratio {area_ratio})");
     assert!(moved.area.relative_change.abs() < 1e-12, "{:?}", moved.area);
     let areas_after = b.model.body_areas(&b.coords(&b.sol.u));
     for (x, y) in areas_before.iter().zip(&areas_after) {

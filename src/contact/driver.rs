@@ -314,8 +314,7 @@ impl ContactProblem {
         let mut body_h = Vec::new();
         let mut body_e = Vec::new();
         for b in &model.bodies {
-            let a: f64 = b.mesh.area(&b.mesh.nodes);
-            body_h.push((a / b.mesh.n_elements().max(1) as f64).sqrt());
+            body_h.push(b.contact_h);
             body_e.push(match &model.materials[b.material] {
                 crate::material::Material::Elastic(m) => m.e,
                 crate::material::Material::J2(m) => m.e,
