@@ -5,6 +5,7 @@
 //!   loop;
 //! - `ours_*_with_analysis`: analysis + factorisation + solve, the same work as
 //! - `bare_faer_*`: `sp_lu` / `sp_cholesky` + solve called directly on the same matrix.
+//! - `solve_205k_threads`: our LU and Cholesky factorisation + solve on 1 and 2 threads.
 //! Run: `cargo bench --bench solve`.
 use criterion::{criterion_group, criterion_main, Criterion};
 use mpfem::bench_support::{assembly_fixture, Law};
@@ -46,6 +47,26 @@ fn bench(c: &mut Criterion) {
     }
     g.bench_function("bare_faer_lu", |bn| bn.iter(|| black_box(direct::bare_faer_lu_solve(&kk, &b))));
     g.bench_function("bare_faer_cholesky", |bn| bn.iter(|| black_box(direct::bare_faer_cholesky_solve(&kk, &b))));
+    g.finish();
+    // the same factorisation + solve on 1 and 2 threads (`Par::rayon(2)`): what rank 0 of a
+    // 2-rank run gains from the core of the rank that waits for it (`SolverSpec::factor_threads`)
+    let mut g = c.benchmark_group("solve_205k_threads");
+    g.sample_size(10);
+    for kind in [LinearSolverKind::Lu, LinearSolverKind::Cholesky] {
+        for threads in [1, 2] {
+            let opts = SolverOptions { kind, threads, ..Default::default() };
+            let mut s = make_solver(&opts);
+            s.analyze(&kk).expect("analyze");
+            let mut x = vec![0.0; b.len()];
+            g.bench_function(format!("ours_{kind:?}_{threads}_threads"), |bn| {
+                bn.iter(|| {
+                    s.factor(&kk).expect("factor");
+                    s.solve(&kk, &b, &mut x).expect("solve");
+                    black_box(&x);
+                })
+            });
+        }
+    }
     g.finish();
 }
 

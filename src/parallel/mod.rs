@@ -67,6 +67,10 @@ pub trait Collective: Send + Sync {
     fn sum_to_root(&self, x: &mut [f64]);
     /// Rank 0's `x` on every process.
     fn broadcast(&self, x: &mut [f64]);
+    /// Wait until every process has reached this call, sleeping between polls instead of
+    /// spinning (a barrier for the places where the others wait for rank 0's work, so that its
+    /// threads can run on their cores). Serial: nothing.
+    fn idle_barrier(&self) {}
     /// Smallest `x` over the processes, on every process.
     fn min_u64(&self, x: u64) -> u64;
     /// Largest `x` over the processes, on every process.
