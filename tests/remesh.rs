@@ -606,6 +606,7 @@ fn remeshing_keeps_the_contact_history_of_the_assembly() {
         lm_committed: Vec::new(),
         nodal: reset.nodal.clone(),
         body_h: reset.body_h.clone(),
+        area: Vec::new(),
     };
     r.contact.as_mut().unwrap().set_state(empty).unwrap();
     let its = b.equilibrate().unwrap();

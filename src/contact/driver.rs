@@ -166,6 +166,12 @@ pub struct ContactState {
     pub nodal: NodalContact,
     /// Element size of each body used for the default penalty (kept over re-meshes).
     pub body_h: Vec<f64>,
+    /// Tributary length of every slave node (mm): after a re-mesh the kept contact zones keep
+    /// their old reference lengths ([`ContactProblem::carry_history`]), which a problem built
+    /// afresh from the meshes would not know. Empty in checkpoints written before it was kept
+    /// (the lengths of the meshes are used then).
+    #[serde(default)]
+    pub area: Vec<f64>,
 }
 
 pub struct ContactProblem {
@@ -1032,7 +1038,7 @@ impl ContactProblem {
         nts.sort_by_key(|(k, _)| *k);
         let mut lm_committed: Vec<((u8, usize, usize), f64)> = self.lm.committed.iter().map(|(k, v)| (*k, *v)).collect();
         lm_committed.sort_by_key(|(k, _)| *k);
-        ContactState { nts, walls: self.wall_hist.clone(), lm_committed, nodal: self.nodal.clone(), body_h: self.body_h.clone() }
+        ContactState { nts, walls: self.wall_hist.clone(), lm_committed, nodal: self.nodal.clone(), body_h: self.body_h.clone(), area: self.area.clone() }
     }
 
     /// Set the committed state from [`ContactProblem::state`] of the same model.
@@ -1052,6 +1058,12 @@ impl ContactProblem {
         }
         if s.body_h.len() != self.body_h.len() {
             return Err(format!("contact: {} bodies in the checkpoint, {} in the model", s.body_h.len(), self.body_h.len()));
+        }
+        if !s.area.is_empty() && s.area.len() != self.area.len() {
+            return Err(format!("contact: {} boundary lengths in the checkpoint, {} boundary nodes in the model", s.area.len(), self.area.len()));
+        }
+        if !s.area.is_empty() {
+            self.area = s.area;
         }
         self.nts_hist = s.nts.into_iter().collect();
         self.wall_hist = s.walls;
