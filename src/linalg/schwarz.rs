@@ -554,7 +554,10 @@ impl LinearSolver for SchwarzPcg {
         // nbr_col[p][t]: where the columns of the t-th neighbour of p start in p's coarse rows
         let nbr_col: Vec<Vec<usize>> = nbrs
             .iter()
-            .map(|l| l.iter().scan(0, |c, &q| { let s = *c; *c += self.coarse_dim[q]; Some(s) }).collect())
+            .map(|l| {
+                let mut start = 0;
+                l.iter().map(|&q| std::mem::replace(&mut start, start + self.coarse_dim[q])).collect()
+            })
             .collect();
         // A Φ: per row, the particles its columns belong to
         let mut aphi_rows = Vec::with_capacity(n);
