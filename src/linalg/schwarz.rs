@@ -556,7 +556,13 @@ impl LinearSolver for SchwarzPcg {
             .iter()
             .map(|l| {
                 let mut start = 0;
-                l.iter().map(|&q| std::mem::replace(&mut start, start + self.coarse_dim[q])).collect()
+                l.iter()
+                    .map(|&q| {
+                        let s = start;
+                        start += self.coarse_dim[q];
+                        s
+                    })
+                    .collect()
             })
             .collect();
         // A Φ: per row, the particles its columns belong to
