@@ -17,7 +17,7 @@
 # (linear = "pcg", preconditioner = "schwarz", pcg_tol = 1e-8: every rank factorises the blocks
 # of its own particles; a system it fails on is solved directly on rank 0, counted in the
 # direct_fallbacks column). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
-# N = 1); wall time and phases from the run's summary.json (mpirun's start-up not included);
+# N = 1; THREADS changes it); wall time and phases from the run's summary.json (mpirun's start-up not included);
 # assembly_s = element + contact assembly, linear_s = linear solves.
 # Time: the default 3 rounds (48 runs) took 4 min 47 s on the shared 2-core development machine
 # (load average ~3; one round took 2.5 min at load ~7), see docs/scaling/README.md: the sizes
@@ -29,6 +29,10 @@
 #   RANKS      rank counts (default "1 2 3 4")
 #   REPEAT     rounds over all runs (default 3; 1 with QUICK=1); scaling.csv keeps the fastest
 #   MESH_SIZE  element size in mm (default 2.5; smaller makes every job larger)
+#   THREADS    threads a rank (default 1; 0 = the node's cores divided among its ranks for the
+#              assembly, and all of them for rank 0's gathered factorisation, which the other
+#              ranks wait for asleep)
+#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz")
 #   QUICK=1    tiny sizes (4 x 4 discs strong, 2 discs a rank weak, 2 steps), one round: a
 #              smoke run of about 20 s
 #   OMPI_MCA_mpi_yield_when_idle  default 1 here: ranks waiting in MPI give up the core (more
@@ -71,6 +75,14 @@ repeats=${REPEAT:-3}
 [ "$quick" = 1 ] && repeats=${REPEAT:-1}
 [[ $repeats =~ ^[1-9][0-9]*$ ]] || die "REPEAT must be a positive integer, got '$repeats'"
 mesh_size=${MESH_SIZE:-2.5}
+# threads per rank (mpfem run --threads): 1 by default; 0 divides the node's cores among the
+# ranks for the assembly and lets rank 0's gathered factorisation take all of them
+threads=${THREADS:-1}
+solvers=${SOLVERS:-cholesky pcg-schwarz}
+for s in $solvers; do
+  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || die "SOLVERS must name cholesky and/or pcg-schwarz, got '$solvers'"
+done
+[[ $threads =~ ^[0-9]+$ ]] || die "THREADS must be a non-negative integer, got '$threads'"
 
 # (root in containers; local ranks without ssh; waiting ranks yield the core)
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_plm=${OMPI_MCA_plm:-isolated}
@@ -147,7 +159,7 @@ EOF
 }
 
 launch() { # ranks case out log
-  mpirun --oversubscribe --bind-to none -n "$1" "$exe" run "$2" --out "$3" --quiet --no-plots --threads 1 >"$4" 2>&1
+  mpirun --oversubscribe --bind-to none -n "$1" "$exe" run "$2" --out "$3" --quiet --no-plots --threads "$threads" >"$4" 2>&1
 }
 
 # The binary must be an MPI build: otherwise mpirun starts N independent serial runs.
@@ -240,10 +252,10 @@ weak_grid() { # ranks -> "nx ny"
 # the repeats are whole rounds over all runs, so that a burst of load from elsewhere does not
 # hit every repeat of one configuration
 for rep in $(seq 1 "$repeats"); do
-  for solver in cholesky pcg-schwarz; do
+  for solver in $solvers; do
     for n in $ranks_list; do run strong "$solver" "$n" "$snx" "$sny" "$rep"; done
   done
-  for solver in cholesky pcg-schwarz; do
+  for solver in $solvers; do
     for n in $ranks_list; do
       read -r wnx wny <<<"$(weak_grid "$n")"
       run weak "$solver" "$n" "$wnx" "$wny" "$rep"
