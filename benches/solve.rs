@@ -5,7 +5,8 @@
 //!   loop;
 //! - `ours_*_with_analysis`: analysis + factorisation + solve, the same work as
 //! - `bare_faer_*`: `sp_lu` / `sp_cholesky` + solve called directly on the same matrix.
-//! - `solve_205k_threads`: our LU and Cholesky factorisation + solve on 1 and 2 threads.
+//! - `solve_205k_threads`: our LU and Cholesky factorisation + solve on 1 and 2 threads (2 were
+//!   slower here: LU 1.38 against 1.01 s, Cholesky 0.374 against 0.242 s, 2026-12-01).
 //! Run: `cargo bench --bench solve`.
 use criterion::{criterion_group, criterion_main, Criterion};
 use mpfem::bench_support::{assembly_fixture, Law};
@@ -48,8 +49,10 @@ fn bench(c: &mut Criterion) {
     g.bench_function("bare_faer_lu", |bn| bn.iter(|| black_box(direct::bare_faer_lu_solve(&kk, &b))));
     g.bench_function("bare_faer_cholesky", |bn| bn.iter(|| black_box(direct::bare_faer_cholesky_solve(&kk, &b))));
     g.finish();
-    // the same factorisation + solve on 1 and 2 threads (`Par::rayon(2)`): what rank 0 of a
-    // 2-rank run gains from the core of the rank that waits for it (`SolverSpec::factor_threads`)
+    // the same factorisation + solve on 1 and 2 threads (`Par::rayon(2)`): whether rank 0 of a
+    // 2-rank run would gain from the core of the rank that waits for it (measured 2026-12-01,
+    // idle machine: LU 1.01 s on 1 thread, 1.38 s on 2; Cholesky 0.242 s and 0.374 s — slower,
+    // so the gathered factorisation keeps one thread a rank)
     let mut g = c.benchmark_group("solve_205k_threads");
     g.sample_size(10);
     for kind in [LinearSolverKind::Lu, LinearSolverKind::Cholesky] {

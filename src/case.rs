@@ -672,11 +672,6 @@ pub struct SolverSpec {
     pub ordering: crate::linalg::FillOrdering,
     /// 0 = all cores.
     pub threads: usize,
-    /// Threads of rank 0's factorisation and solves in a run on several processes with the
-    /// gathered direct solver (the other processes wait for it without holding a core);
-    /// 0 = `threads`. Set by the command line from the cores of the node when `threads` is 0;
-    /// not a case key.
-    pub factor_threads: usize,
     /// Augmented-Lagrangian penalty for ν = 0.5, in units of the shear modulus.
     pub incompressible_penalty: f64,
     pub volume_tol: f64,
@@ -701,7 +696,6 @@ impl Default for SolverSpec {
             pcg_max_iterations: 10_000,
             ordering: crate::linalg::FillOrdering::Amd,
             threads: 0,
-            factor_threads: 0,
             incompressible_penalty: 1000.0,
             volume_tol: 1e-10,
             max_volume_updates: 30,

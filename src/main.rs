@@ -678,12 +678,12 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
         c.solver.threads = t;
     }
     if comm.size() > 1 && c.solver.threads == 0 {
-        // "every core" is shared by the ranks of a node; rank 0's gathered factorisation, which
-        // the others wait for asleep, takes all of them
+        // "every core" is shared by the ranks of a node (rank 0's gathered factorisation stays
+        // at its share: faer's sparse factorisations ran 1.4-1.5 times slower on 2 threads than
+        // on 1 here, `cargo bench --bench solve -- solve_205k_threads`)
         let local = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE").or_else(|_| std::env::var("MPI_LOCALNRANKS")).ok().and_then(|v| v.parse::<usize>().ok()).unwrap_or(comm.size());
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         c.solver.threads = (cores / local.max(1)).max(1);
-        c.solver.factor_threads = cores;
     }
     // the checkpoint to continue from, read before anything is written
     let checkpoint = match &control.restart {

@@ -407,15 +407,12 @@ impl Simulation {
         // the particles are the subdomains of the Schwarz preconditioner, distributed like the
         // elements; with it every process takes part in the solve, otherwise rank 0 alone solves
         let distributed_solve = par.is_some() && kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
-        // a gathered solve on several processes: rank 0 may factorise with the cores of the
-        // processes that wait for it
-        let solve_threads = if par.is_some() && !distributed_solve && spec.factor_threads > 0 { spec.factor_threads } else { threads };
         let opts = SolverOptions {
             kind,
             preconditioner: spec.preconditioner,
             pcg_tol: spec.pcg_tol,
             pcg_max_iterations: spec.pcg_max_iterations,
-            threads: solve_threads,
+            threads,
             ordering: spec.ordering,
             symmetric: model.symmetric_tangent(),
         };
@@ -1838,8 +1835,9 @@ impl Simulation {
 /// process of a run on several processes (`par`); unchanged on one.
 fn agree_linear(par: Option<&Distribution>, r: Result<(), NewtonFailure>, what: &str) -> Result<(), NewtonFailure> {
     let Some(p) = par else { return r };
-    // the other processes wait here while rank 0 factorises and solves: asleep, so that its
-    // factorisation threads can use their cores (a blocking collective would spin on them)
+    // the other processes wait here while rank 0 factorises and solves: asleep, so that their
+    // cores are free for other work (a blocking collective spins on them; with more ranks than
+    // cores it took the core of a rank that was working)
     p.comm.idle_barrier();
     let mut failed = [if r.is_err() { 1.0 } else { 0.0 }];
     p.comm.broadcast(&mut failed);

@@ -29,9 +29,7 @@
 #   RANKS      rank counts (default "1 2 3 4")
 #   REPEAT     rounds over all runs (default 3; 1 with QUICK=1); scaling.csv keeps the fastest
 #   MESH_SIZE  element size in mm (default 2.5; smaller makes every job larger)
-#   THREADS    threads a rank (default 1; 0 = the node's cores divided among its ranks for the
-#              assembly, and all of them for rank 0's gathered factorisation, which the other
-#              ranks wait for asleep)
+#   THREADS    threads a rank (default 1; 0 = the node's cores divided among its ranks)
 #   SOLVERS    the solvers to run (default "cholesky pcg-schwarz")
 #   QUICK=1    tiny sizes (4 x 4 discs strong, 2 discs a rank weak, 2 steps), one round: a
 #              smoke run of about 20 s
@@ -75,8 +73,7 @@ repeats=${REPEAT:-3}
 [ "$quick" = 1 ] && repeats=${REPEAT:-1}
 [[ $repeats =~ ^[1-9][0-9]*$ ]] || die "REPEAT must be a positive integer, got '$repeats'"
 mesh_size=${MESH_SIZE:-2.5}
-# threads per rank (mpfem run --threads): 1 by default; 0 divides the node's cores among the
-# ranks for the assembly and lets rank 0's gathered factorisation take all of them
+# threads per rank (mpfem run --threads): 1 by default; 0 divides the node's cores among the ranks
 threads=${THREADS:-1}
 solvers=${SOLVERS:-cholesky pcg-schwarz}
 for s in $solvers; do

@@ -33,6 +33,23 @@ use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Symbolic
 use faer::{Conj, MatMut, Par, Side};
 
 /// faer parallelism for a thread count (0 or 1 → sequential).
+/// Run `f`, turning a panic inside it into `None`, without the panic message on stderr.
+///
+/// faer 0.24's indefinite sparse factorisations can fail an index assertion on some tangents
+/// (seen: the intranode Bunch–Kaufman LBLᵀ of a 61 k-unknown 16 × 16 disc compaction at a
+/// 1.25 mm mesh, `row < self.nrows()` with row = nrows = 2 in a 2 × 2 pivot block), which
+/// ended the whole run with exit code 101. Behind this the factorisation fails like any other
+/// singular one: the next fallback is tried, and the Newton step cuts back. The panic hook is
+/// swapped for a silent one while `f` runs (the library does not print; the solver logs the
+/// failure through `tracing`).
+fn without_panics<T>(f: impl FnOnce() -> T) -> Option<T> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    std::panic::set_hook(hook);
+    out.ok()
+}
+
 pub fn faer_par(threads: usize) -> Par {
     if threads > 1 {
         Par::rayon(threads)
@@ -671,33 +688,39 @@ impl LinearSolver for FaerCholesky {
         // supernodal structure; on the simplicial one it would be a plain LDLᵀ without error
         // reporting, so that case goes straight to the LDLᵀ below).
         if matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
-            symbolic.factorize_numeric_intranode_lblt(
-                &mut self.l_values,
-                &mut self.subdiag,
-                &mut self.perm_fwd,
-                &mut self.perm_inv,
-                mat,
-                Side::Lower,
-                par,
-                MemStack::new(&mut self.mem),
-                Default::default(),
-            );
-            if self.l_values.iter().chain(&self.subdiag).all(|v| v.is_finite()) {
+            let done = without_panics(|| {
+                symbolic.factorize_numeric_intranode_lblt(
+                    &mut self.l_values,
+                    &mut self.subdiag,
+                    &mut self.perm_fwd,
+                    &mut self.perm_inv,
+                    mat,
+                    Side::Lower,
+                    par,
+                    MemStack::new(&mut self.mem),
+                    Default::default(),
+                );
+            });
+            if done.is_none() {
+                tracing::debug!("faer's intranode LBLᵀ panicked on this matrix; trying LDLᵀ");
+            }
+            if done.is_some() && self.l_values.iter().chain(&self.subdiag).all(|v| v.is_finite()) {
                 self.kind = Some(CholeskyKind::Lblt);
                 return Ok(());
             }
         }
 
-        let ldlt = symbolic.factorize_numeric_ldlt(
-            &mut self.l_values,
-            mat,
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut self.mem),
-            Default::default(),
-        );
-        let ldlt = ldlt.map(|_| ());
+        let ldlt = without_panics(|| {
+            symbolic
+                .factorize_numeric_ldlt(&mut self.l_values, mat, Side::Lower, Default::default(), par, MemStack::new(&mut self.mem), Default::default())
+                .map(|_| ())
+        });
+        let Some(ldlt) = ldlt else {
+            return Err(LinalgError::Singular(format!(
+                "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and the indefinite \
+                 factorisations failed inside faer; use the LU solver"
+            )));
+        };
         match ldlt {
             Ok(()) if self.l_values.iter().all(|v| v.is_finite()) => {
                 self.kind = Some(CholeskyKind::Ldlt);

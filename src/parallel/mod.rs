@@ -68,8 +68,8 @@ pub trait Collective: Send + Sync {
     /// Rank 0's `x` on every process.
     fn broadcast(&self, x: &mut [f64]);
     /// Wait until every process has reached this call, sleeping between polls instead of
-    /// spinning (a barrier for the places where the others wait for rank 0's work, so that its
-    /// threads can run on their cores). Serial: nothing.
+    /// spinning (a barrier for the places where the others wait for rank 0's work, so that
+    /// their cores are free meanwhile). Serial: nothing.
     fn idle_barrier(&self) {}
     /// Smallest `x` over the processes, on every process.
     fn min_u64(&self, x: u64) -> u64;
