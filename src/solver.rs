@@ -404,9 +404,6 @@ impl Simulation {
         } else {
             None
         };
-        // the particles are the subdomains of the Schwarz preconditioner, distributed like the
-        // elements; with it every process takes part in the solve, otherwise rank 0 alone solves
-        let distributed_solve = par.is_some() && kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
         let opts = SolverOptions {
             kind,
             preconditioner: spec.preconditioner,
@@ -416,6 +413,9 @@ impl Simulation {
             ordering: spec.ordering,
             symmetric: model.symmetric_tangent(),
         };
+        // the particles are the subdomains of the Schwarz preconditioner, distributed like the
+        // elements; with it every process takes part in the solve, otherwise rank 0 alone solves
+        let distributed_solve = par.is_some() && kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
         let mut subdomains = crate::linalg::schwarz::Subdomains::default();
         if kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz {
             let ranges: Vec<_> = model.bodies.iter().map(|b| b.node_offset..b.node_offset + b.mesh.nodes.len()).collect();

@@ -185,7 +185,8 @@ pub struct ContactProblem {
     pub slaves: Vec<(usize, usize)>,
     /// Tributary (reference) boundary length of each slave node (mm).
     pub area: Vec<f64>,
-    /// Mean element size and Young's modulus of each body.
+    /// Contact length h of each body ([`crate::model::Body::contact_h`], kept over re-meshes)
+    /// and its Young's modulus.
     pub body_h: Vec<f64>,
     pub body_e: Vec<f64>,
     search: ContactSearch,
