@@ -1328,7 +1328,12 @@ impl Simulation {
         let t1 = Instant::now();
         if let Some(c) = self.contact.as_mut() {
             let kk = if root_tangent { Some((&mut self.kk, self.assembler.eq.as_slice(), self.assembler.n_free)) } else { None };
-            self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk);
+            // (each process evaluates the pairs of its own particles' slave nodes)
+            let ex: &dyn crate::contact::driver::PairExchange = match &self.par {
+                Some(p) => p,
+                None => &crate::contact::driver::EveryPair,
+            };
+            self.contact_stats = c.add(&x, inc.time, &mut self.f_int, kk, tangent, ex);
             // stabilisation springs (in residual and tangent, dissipate energy) and the
             // tangent-only regularisation (changes the Newton path, not the solution)
             // (a dof the contacts hold has no spring in the residual but keeps it in the

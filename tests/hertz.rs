@@ -207,7 +207,7 @@ fn check_hertz(text: String) {
     let x = sim.coords(&sim.sol.u);
     let mut f = vec![0.0; sim.model.n_dofs()];
     let contact = sim.contact.as_mut().unwrap();
-    let stats = contact.add(&x, t, &mut f, None);
+    let stats = contact.add(&x, t, &mut f, None, false, &mpfem::contact::driver::EveryPair);
     let mut current_length = vec![0.0; x.len()];
     for s in &contact.segments {
         let [a, b] = s.nodes;

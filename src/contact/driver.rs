@@ -836,97 +836,248 @@ impl ContactProblem {
     /// Add the contact forces to `f_int` and, with a tangent, their derivative to `kk`, at
     /// configuration `x` and time `t`. Histories are read from the committed state (for the
     /// augmented Lagrangian, the current multipliers); the trial histories are kept for commit.
-    pub fn add(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize], usize)>) -> ContactStats {
+    ///
+    /// The kernels are shared out by `ex` (see [`PairExchange`]): this process evaluates the
+    /// node-to-segment and node-to-wall pairs of the slave nodes of its bodies only, into
+    /// records that `ex` gathers from every process; every process then adds the records in
+    /// the serial order (pairs by index, then walls by wall and slave), so the forces, the
+    /// statistics, the trial histories and the nodal results come out the same on every
+    /// process and bit-identical to a serial run. `tangent` says whether a tangent is
+    /// assembled (the same on every process: the blocks of the tangent go to the root only,
+    /// which alone passes `kk`). Lagrange multipliers (`method = "lagrange"`) are evaluated on
+    /// every process.
+    pub fn add(&mut self, x: &[[f64; 2]], t: f64, f_int: &mut [f64], kk: Option<(&mut CsrMatrix, &[usize], usize)>, tangent: bool, ex: &dyn PairExchange) -> ContactStats {
         if self.spec.method == ContactMethod::Lagrange {
             return self.add_lagrange(x, t, f_int, kk);
         }
-        let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
-        self.trial_nodal.reset(x.len(), self.walls.len());
+        let nf = if self.smoothed() { smooth::NDOF } else { 6 };
+        let (local, local_k) = self.evaluate_own(x, t, tangent, ex);
+        let all = ex.all_gather(local);
+        let all_k = if tangent { ex.gather_to_root(local_k) } else { Vec::new() };
+        let recs = Records::parse(&all, nf, false);
+        let krecs = Records::parse(&all_k, nf, true);
+        self.apply_records(x, f_int, kk, &recs, &krecs)
+    }
+
+    /// The kernels of the pairs whose slave node belongs to a body this process evaluates, as
+    /// records (layout: [`Records`]): everything every process needs, and the tangent blocks
+    /// of the active pairs (for the root) when `tangent`.
+    fn evaluate_own(&self, x: &[[f64; 2]], t: f64, tangent: bool, ex: &dyn PairExchange) -> (Vec<f64>, Vec<f64>) {
+        let smoothed = self.smoothed();
+        let nf = if smoothed { smooth::NDOF } else { 6 };
+        let (mut nts, mut nts_k) = (Vec::new(), Vec::new());
         let mut out = PairOut::default();
         let mut sout = SmoothPairOut::default();
-        let smoothed = self.smoothed();
+        let (mut n_nts, mut n_nts_k) = (0usize, 0usize);
         for (k, p) in self.pairs.iter().enumerate() {
             let (node, body) = self.slaves[p.slave];
+            if !ex.evaluates(body) {
+                continue;
+            }
             let s = self.segments[p.segment];
             let old = self.nts_hist.get(&(node, p.segment)).copied().unwrap_or_default();
             let params = self.params(body, Some(s.body));
             let kind = self.spec.kind;
-            if smoothed {
+            // (the tangent block goes straight into its buffer)
+            let (f, gap, pressure, shear, slip, active, new, aug): (&[f64], _, _, _, _, _, _, _) = if smoothed {
                 let master = self.master(p.segment, x);
                 smooth::nts_smooth_pair(x[node], &master, self.area[p.slave] * p.weight, kind, &params, &old, &mut sout);
-                self.trial_nts[k] = sout.new_history;
-                self.aug_nts[k] = smooth::augment(&sout);
-                self.trial_nodal.gap(node, sout.gap);
-                if !sout.active {
-                    continue;
+                if tangent && sout.active {
+                    nts_k.push(k as f64);
+                    sout.k.iter().for_each(|row| nts_k.extend_from_slice(row));
+                    n_nts_k += 1;
                 }
-                stats.active += 1;
-                stats.max_penetration = stats.max_penetration.max(-sout.gap);
-                stats.violation = stats.violation.max(violation(kind, sout.gap, sout.shear, sout.slip, &old, params.eps_t));
-                self.trial_nodal.active(node, p.weight * sout.pressure, kind, sout.slip);
-                let (dofs, nodes) = self.smooth_dofs(node, p.segment);
-                self.trial_nodal.force(&nodes, &sout.f);
-                for i in 0..smooth::NDOF {
-                    f_int[dofs[i]] += sout.f[i];
+                (&sout.f, sout.gap, sout.pressure, sout.shear, sout.slip, sout.active, sout.new_history, smooth::augment(&sout))
+            } else {
+                kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave] * p.weight, kind, &params, &old, &mut out);
+                if tangent && out.active {
+                    nts_k.push(k as f64);
+                    out.k.iter().for_each(|row| nts_k.extend_from_slice(row));
+                    n_nts_k += 1;
                 }
-                if let Some((m, eq, _)) = kk.as_mut() {
-                    add_block(m, eq, &dofs, &sout.k);
-                }
-                continue;
-            }
-            kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave] * p.weight, kind, &params, &old, &mut out);
-            self.trial_nts[k] = out.new_history;
-            self.aug_nts[k] = kernels::augment(&old, &out);
-            self.trial_nodal.gap(node, out.gap);
-            if !out.active {
-                continue;
-            }
-            stats.active += 1;
-            stats.max_penetration = stats.max_penetration.max(-out.gap);
-            stats.violation = stats.violation.max(violation(kind, out.gap, out.shear, out.slip, &old, params.eps_t));
-            self.trial_nodal.active(node, p.weight * out.pressure, kind, out.slip);
-            self.trial_nodal.force(&[node, s.nodes[0], s.nodes[1]], &out.f);
-            let dofs = [2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
-            for i in 0..6 {
-                f_int[dofs[i]] += out.f[i];
-            }
-            if let Some((m, eq, _)) = kk.as_mut() {
-                add_block(m, eq, &dofs, &out.k);
-            }
+                (&out.f, out.gap, out.pressure, out.shear, out.slip, out.active, out.new_history, kernels::augment(&old, &out))
+            };
+            let viol = if active { violation(kind, gap, shear, slip, &old, params.eps_t) } else { 0.0 };
+            nts.push(k as f64);
+            nts.extend_from_slice(f);
+            nts.extend_from_slice(&[gap, pressure, viol, f64::from(u8::from(slip)), f64::from(u8::from(active))]);
+            put_history(&mut nts, &new);
+            put_history(&mut nts, &aug);
+            n_nts += 1;
         }
+        debug_assert_eq!(nts.len(), n_nts * Records::nts_len(nf));
+        let (mut walls, mut walls_k, mut gaps) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut n_walls, mut n_walls_k) = (0usize, 0usize);
+        let ns = self.slaves.len();
+        let mut wall_gap = vec![f64::NAN; ns];
         let mut wout = WallOut::default();
         for (w, spec) in self.walls.iter().enumerate() {
             let wall = Wall::from_spec(spec, t);
             // tangential wall motion: the walls move along their normals only
             for (i, &(node, body)) in self.slaves.iter().enumerate() {
+                if !ex.evaluates(body) {
+                    continue;
+                }
                 let old = self.wall_hist[w][i];
-                if self.untied_wall(spec, &wall, x[node], body, &old) {
-                    self.trial_wall[w][i] = PairHistory::default();
-                    self.aug_wall[w][i] = old;
-                    continue;
+                let (new, aug, evaluated) = if self.untied_wall(spec, &wall, x[node], body, &old) {
+                    (PairHistory::default(), old, false)
+                } else {
+                    let params = self.params(body, None);
+                    kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
+                    let g = wout.gap;
+                    if g.is_finite() && !(wall_gap[i] <= g) {
+                        wall_gap[i] = g;
+                    }
+                    (wout.new_history, kernels::augment_wall(&old, &wout), true)
+                };
+                let active = evaluated && wout.active;
+                // a pair without a record is open with default histories (the anchor of an
+                // inactive history means nothing: the kernels start afresh from it)
+                if active || !unused(&new) || !unused(&aug) {
+                    walls.push((w * ns + i) as f64);
+                    if evaluated {
+                        walls.extend_from_slice(&wout.f);
+                        let viol = if active { violation(spec.kind, wout.gap, wout.shear, wout.slip, &old, self.params(body, None).eps_t) } else { 0.0 };
+                        walls.extend_from_slice(&[wout.gap, wout.pressure, viol, f64::from(u8::from(wout.slip)), f64::from(u8::from(active))]);
+                    } else {
+                        walls.extend_from_slice(&[0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0]);
+                    }
+                    put_history(&mut walls, &new);
+                    put_history(&mut walls, &aug);
+                    n_walls += 1;
                 }
-                let params = self.params(body, None);
-                kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
-                self.trial_wall[w][i] = wout.new_history;
-                self.aug_wall[w][i] = kernels::augment_wall(&old, &wout);
-                self.trial_nodal.gap(node, wout.gap);
-                if !wout.active {
-                    continue;
+                if tangent && active {
+                    walls_k.push((w * ns + i) as f64);
+                    walls_k.extend(wout.k.iter().flatten());
+                    n_walls_k += 1;
                 }
-                stats.active += 1;
-                stats.max_penetration = stats.max_penetration.max(-wout.gap);
-                stats.violation = stats.violation.max(violation(spec.kind, wout.gap, wout.shear, wout.slip, &old, params.eps_t));
-                stats.wall_force[w] += wout.pressure * self.area[i];
-                self.trial_nodal.wall_force[w][node] += wout.pressure * self.area[i];
-                self.trial_nodal.force(&[node], &wout.f);
-                self.trial_nodal.active(node, 0.0, spec.kind, wout.slip);
-                self.trial_nodal.pressure[node] = self.trial_nodal.pressure[node].max(wout.pressure);
-                let dofs = [2 * node, 2 * node + 1];
-                for c in 0..2 {
-                    f_int[dofs[c]] += wout.f[c];
+            }
+        }
+        for (i, &g) in wall_gap.iter().enumerate() {
+            if g.is_finite() {
+                gaps.extend_from_slice(&[i as f64, g]);
+            }
+        }
+        let n_gaps = gaps.len() / 2;
+        let mut local = vec![n_nts as f64, n_walls as f64, n_gaps as f64];
+        local.extend(nts);
+        local.extend(walls);
+        local.extend(gaps);
+        let mut local_k = vec![n_nts_k as f64, n_walls_k as f64, 0.0];
+        local_k.extend(nts_k);
+        local_k.extend(walls_k);
+        (local, local_k)
+    }
+
+    /// Add the gathered records of every process in the serial order (see
+    /// [`ContactProblem::add`]): forces, trial histories, nodal results and statistics, and
+    /// the tangent blocks `krecs` into `kk`.
+    fn apply_records(&mut self, x: &[[f64; 2]], f_int: &mut [f64], mut kk: Option<(&mut CsrMatrix, &[usize], usize)>, recs: &Records, krecs: &Records) -> ContactStats {
+        let mut stats = ContactStats { wall_force: vec![0.0; self.walls.len()], ..Default::default() };
+        self.trial_nodal.reset(x.len(), self.walls.len());
+        let smoothed = self.smoothed();
+        let nf = recs.nf;
+        let npairs = self.pairs.len();
+        // position of each pair's record and tangent block
+        let mut at = vec![usize::MAX; npairs];
+        for (pos, r) in recs.nts.iter().enumerate() {
+            at[r[0] as usize] = pos;
+        }
+        let mut at_k = vec![usize::MAX; if kk.is_some() { npairs } else { 0 }];
+        if kk.is_some() {
+            for (pos, r) in krecs.nts.iter().enumerate() {
+                at_k[r[0] as usize] = pos;
+            }
+        }
+        let kind = self.spec.kind;
+        for (k, p) in self.pairs.iter().enumerate() {
+            let (node, _) = self.slaves[p.slave];
+            let s = self.segments[p.segment];
+            let Some(r) = recs.nts.get(at[k]) else {
+                // (every pair has one owner, so this cannot happen; the pair then contributes
+                // nothing)
+                self.trial_nts[k] = PairHistory::default();
+                self.aug_nts[k] = PairHistory::default();
+                continue;
+            };
+            let f = &r[1..1 + nf];
+            let (gap, pressure, viol, slip, active) = (r[1 + nf], r[2 + nf], r[3 + nf], r[4 + nf] != 0.0, r[5 + nf] != 0.0);
+            self.trial_nts[k] = get_history(&r[6 + nf..10 + nf]);
+            self.aug_nts[k] = get_history(&r[10 + nf..14 + nf]);
+            self.trial_nodal.gap(node, gap);
+            if !active {
+                continue;
+            }
+            stats.active += 1;
+            stats.max_penetration = stats.max_penetration.max(-gap);
+            stats.violation = stats.violation.max(viol);
+            self.trial_nodal.active(node, p.weight * pressure, kind, slip);
+            let block = kk.as_ref().and_then(|_| krecs.nts.get(at_k[k])).map(|b| &b[1..]);
+            if smoothed {
+                let (dofs, nodes) = self.smooth_dofs(node, p.segment);
+                self.trial_nodal.force(&nodes, f);
+                for i in 0..smooth::NDOF {
+                    f_int[dofs[i]] += f[i];
                 }
-                if let Some((m, eq, _)) = kk.as_mut() {
-                    add_block(m, eq, &dofs, &wout.k);
+                if let (Some((m, eq, _)), Some(b)) = (kk.as_mut(), block) {
+                    add_block_flat(m, eq, &dofs, b);
+                }
+            } else {
+                self.trial_nodal.force(&[node, s.nodes[0], s.nodes[1]], f);
+                let dofs = [2 * node, 2 * node + 1, 2 * s.nodes[0], 2 * s.nodes[0] + 1, 2 * s.nodes[1], 2 * s.nodes[1] + 1];
+                for i in 0..6 {
+                    f_int[dofs[i]] += f[i];
+                }
+                if let (Some((m, eq, _)), Some(b)) = (kk.as_mut(), block) {
+                    add_block_flat(m, eq, &dofs, b);
+                }
+            }
+        }
+        // walls: every pair without a record is open, with default histories
+        let ns = self.slaves.len();
+        for w in 0..self.walls.len() {
+            self.trial_wall[w].iter_mut().for_each(|h| *h = PairHistory::default());
+            self.aug_wall[w].iter_mut().for_each(|h| *h = PairHistory::default());
+        }
+        for r in &recs.gaps {
+            self.trial_nodal.gap(self.slaves[r[0] as usize].0, r[1]);
+        }
+        let mut order: Vec<usize> = (0..recs.walls.len()).collect();
+        order.sort_by_key(|&q| recs.walls[q][0] as usize);
+        // the tangent blocks in the same order, walked alongside
+        let mut blocks: Vec<&[f64]> = if kk.is_some() { krecs.walls.clone() } else { Vec::new() };
+        blocks.sort_by_key(|b| b[0] as usize);
+        let mut next_block = blocks.iter().peekable();
+        for q in order {
+            let r = recs.walls[q];
+            let key = r[0] as usize;
+            let (w, i) = (key / ns, key % ns);
+            let (node, _) = self.slaves[i];
+            let spec = &self.walls[w];
+            self.trial_wall[w][i] = get_history(&r[8..12]);
+            self.aug_wall[w][i] = get_history(&r[12..16]);
+            let (f, gap, pressure, viol, slip, active) = ([r[1], r[2]], r[3], r[4], r[5], r[6] != 0.0, r[7] != 0.0);
+            if !active {
+                continue;
+            }
+            stats.active += 1;
+            stats.max_penetration = stats.max_penetration.max(-gap);
+            stats.violation = stats.violation.max(viol);
+            stats.wall_force[w] += pressure * self.area[i];
+            self.trial_nodal.wall_force[w][node] += pressure * self.area[i];
+            self.trial_nodal.force(&[node], &f);
+            self.trial_nodal.active(node, 0.0, spec.kind, slip);
+            self.trial_nodal.pressure[node] = self.trial_nodal.pressure[node].max(pressure);
+            let dofs = [2 * node, 2 * node + 1];
+            for c in 0..2 {
+                f_int[dofs[c]] += f[c];
+            }
+            if let Some((m, eq, _)) = kk.as_mut() {
+                while next_block.peek().is_some_and(|b| (b[0] as usize) < key) {
+                    next_block.next();
+                }
+                if let Some(b) = next_block.next_if(|b| b[0] as usize == key) {
+                    add_block_flat(m, eq, &dofs, &b[1..]);
                 }
             }
         }
@@ -1231,6 +1382,218 @@ fn add_block<const N: usize>(m: &mut CsrMatrix, eq: &[usize], dofs: &[usize; N],
             if let Some(pos) = m.find(r, c) {
                 m.values[pos] += k[a][b];
             }
+        }
+    }
+}
+
+/// [`add_block`] for a row-major block of `dofs.len()`² values.
+fn add_block_flat<const N: usize>(m: &mut CsrMatrix, eq: &[usize], dofs: &[usize; N], k: &[f64]) {
+    let n = N;
+    for a in 0..n {
+        let r = eq[dofs[a]];
+        if r == FIXED {
+            continue;
+        }
+        for b in 0..n {
+            let c = eq[dofs[b]];
+            if c == FIXED {
+                continue;
+            }
+            if let Some(pos) = m.find(r, c) {
+                m.values[pos] += k[a * n + b];
+            }
+        }
+    }
+}
+
+/// An inactive history without multipliers: the kernels take nothing from it (they re-anchor
+/// an inactive pair), so any such history stands for the default one.
+fn unused(h: &PairHistory) -> bool {
+    !h.active && h.lambda_n == 0.0 && h.lambda_t == 0.0
+}
+
+fn put_history(v: &mut Vec<f64>, h: &PairHistory) {
+    v.extend_from_slice(&[h.xi_stick, h.lambda_n, h.lambda_t, f64::from(u8::from(h.active))]);
+}
+
+fn get_history(v: &[f64]) -> PairHistory {
+    PairHistory { xi_stick: v[0], lambda_n: v[1], lambda_t: v[2], active: v[3] != 0.0 }
+}
+
+/// How the contact kernels of an evaluation are shared among the processes of a run
+/// ([`ContactProblem::add`]): which slave nodes this process evaluates (those of its own
+/// bodies; the master segments they need are there too, as every process holds the whole
+/// configuration), and the exchange of the evaluated records. The solver passes the
+/// distribution of its run; [`EveryPair`] is one process.
+pub trait PairExchange {
+    /// Whether this process evaluates the pairs whose slave node belongs to `body`.
+    fn evaluates(&self, body: usize) -> bool;
+    /// Every process's `local` records, concatenated in rank order, on every process.
+    fn all_gather(&self, local: Vec<f64>) -> Vec<f64>;
+    /// Every process's `local` records, concatenated in rank order, on the root (anything,
+    /// typically empty, elsewhere).
+    fn gather_to_root(&self, local: Vec<f64>) -> Vec<f64>;
+}
+
+/// One process evaluates every pair.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EveryPair;
+
+impl PairExchange for EveryPair {
+    fn evaluates(&self, _body: usize) -> bool {
+        true
+    }
+    fn all_gather(&self, local: Vec<f64>) -> Vec<f64> {
+        local
+    }
+    fn gather_to_root(&self, local: Vec<f64>) -> Vec<f64> {
+        local
+    }
+}
+
+/// The contact records of an evaluation gathered from every process: each process's part is
+/// a header `[pairs, walls, gaps]` followed by that many node-to-segment records
+/// `[pair, f (nf), gap, pressure, violation, slip, active, trial history (4), augmented history (4)]`,
+/// node-to-wall records `[wall · slaves + slave, f (2), gap, pressure, violation, slip, active,
+/// trial history (4), augmented history (4)]` (only the pairs that are active or have a
+/// history) and gap records `[slave, smallest wall gap]`. The tangent's parts have the same
+/// header with node-to-segment blocks `[pair, k (nf²)]` and node-to-wall blocks
+/// `[wall · slaves + slave, k (4)]` of the active pairs.
+struct Records<'a> {
+    nf: usize,
+    nts: Vec<&'a [f64]>,
+    walls: Vec<&'a [f64]>,
+    gaps: Vec<&'a [f64]>,
+}
+
+impl<'a> Records<'a> {
+    const fn nts_len(nf: usize) -> usize {
+        1 + nf + 5 + 8
+    }
+    const WALL_LEN: usize = 1 + 2 + 5 + 8;
+
+    /// Split gathered value records, or tangent records (`tangent`: blocks of nf² and 4
+    /// values).
+    fn parse(all: &'a [f64], nf: usize, tangent: bool) -> Self {
+        let mut r = Records { nf, nts: Vec::new(), walls: Vec::new(), gaps: Vec::new() };
+        let mut pos = 0;
+        while pos + 3 <= all.len() {
+            let [n_nts, n_walls, n_gaps] = [all[pos] as usize, all[pos + 1] as usize, all[pos + 2] as usize];
+            pos += 3;
+            let (ln, lw) = if tangent { (1 + nf * nf, 1 + 4) } else { (Self::nts_len(nf), Self::WALL_LEN) };
+            let mut take = |n: usize, len: usize, into: &mut Vec<&'a [f64]>| {
+                for _ in 0..n {
+                    let Some(rec) = all.get(pos..pos + len) else {
+                        return false;
+                    };
+                    into.push(rec);
+                    pos += len;
+                }
+                true
+            };
+            if !(take(n_nts, ln, &mut r.nts) && take(n_walls, lw, &mut r.walls) && take(n_gaps, 2, &mut r.gaps)) {
+                break;
+            }
+        }
+        r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::CsrMatrix;
+
+    /// One of two processes: evaluates the bodies of its parity (the records are exchanged by
+    /// the test).
+    struct Half(usize);
+
+    impl PairExchange for Half {
+        fn evaluates(&self, body: usize) -> bool {
+            body % 2 == self.0
+        }
+        fn all_gather(&self, local: Vec<f64>) -> Vec<f64> {
+            local
+        }
+        fn gather_to_root(&self, local: Vec<f64>) -> Vec<f64> {
+            local
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    fn histories(c: &ContactProblem) -> Vec<PairHistory> {
+        let mut h = c.trial_nts.clone();
+        h.extend(c.aug_nts.iter().copied());
+        c.trial_wall.iter().chain(&c.aug_wall).for_each(|w| h.extend(w.iter().copied()));
+        h
+    }
+
+    fn nodal_bits(n: &NodalContact) -> Vec<u64> {
+        let mut v = bits(&n.pressure);
+        v.extend(bits(&n.gap));
+        v.extend(n.status.iter().map(|&s| s as u64));
+        v.extend(n.force.iter().flat_map(|f| bits(f)));
+        n.wall_force.iter().for_each(|w| v.extend(bits(w)));
+        v
+    }
+
+    /// The contact kernels shared out over two processes by slave-node owner, their records
+    /// exchanged and added in the serial order, give the serial evaluation bit for bit: forces,
+    /// every entry of the tangent, statistics, trial and augmented histories, nodal results.
+    /// The 3 × 3 disc job of `tests/mpi_ranks.rs` (Coulomb friction 0.2) after 3 steps, and
+    /// the same with smoothed normals and with the augmented Lagrangian.
+    #[test]
+    fn contact_shared_out_over_two_processes_is_the_serial_evaluation() {
+        let base = include_str!("../../tests/data/mpi_discs_3x3.toml").replace("end = 3.0", "end = 0.15");
+        let variants = [
+            base.clone(),
+            base.replace("friction = 0.2\n", "friction = 0.2\nnormal = \"smoothed\"\n"),
+            base.replace("method = \"penalty\"", "method = \"augmented_lagrangian\"\npenetration_tol = 1e-4"),
+        ];
+        for (v, text) in variants.iter().enumerate() {
+            let case = crate::case::parse(text, std::path::Path::new(".")).unwrap();
+            let model = crate::model::Model::from_case(&case).unwrap();
+            let mut sim = crate::solver::Simulation::new(model, case.time.clone(), case.solver.clone()).unwrap();
+            let summary = sim.run(&mut |_, _| {}).unwrap();
+            assert!(summary.steps >= 3, "variant {v}: {} steps", summary.steps);
+            let x = sim.coords(&sim.sol.u);
+            let t = sim.sol.time;
+            let n = sim.model.n_dofs();
+            let c = sim.contact.as_mut().unwrap();
+            let nf = if c.smoothed() { smooth::NDOF } else { 6 };
+            // a full pattern, so that every block lands; every dof free
+            let full: Vec<Vec<usize>> = (0..n).map(|_| (0..n).collect()).collect();
+            let eq: Vec<usize> = (0..n).collect();
+
+            let mut f1 = vec![0.0; n];
+            let mut k1 = CsrMatrix::from_rows(n, &full);
+            let s1 = c.add(&x, t, &mut f1, Some((&mut k1, &eq, n)), true, &EveryPair);
+            let (h1, nodal1) = (histories(c), nodal_bits(&c.trial_nodal));
+            assert!(s1.active > 20, "variant {v}: only {} active pairs", s1.active);
+            assert!(s1.wall_force.iter().any(|&f| f > 0.0), "variant {v}: no wall carries load");
+
+            // two processes: each evaluates its half, the records are concatenated in rank
+            // order, and each process would then add them all
+            let (mut all, mut all_k) = (Vec::new(), Vec::new());
+            for rank in 0..2 {
+                let (local, local_k) = c.evaluate_own(&x, t, true, &Half(rank));
+                assert!(local[0] >= 10.0 && local_k[0] >= 10.0, "variant {v}: rank {rank} evaluated {} pairs", local[0]);
+                all.extend(local);
+                all_k.extend(local_k);
+            }
+            c.trial_nodal = NodalContact::default();
+            c.trial_nts.iter_mut().for_each(|h| *h = PairHistory { xi_stick: 9.0, ..Default::default() });
+            let mut f2 = vec![0.0; n];
+            let mut k2 = CsrMatrix::from_rows(n, &full);
+            let s2 = c.apply_records(&x, &mut f2, Some((&mut k2, &eq, n)), &Records::parse(&all, nf, false), &Records::parse(&all_k, nf, true));
+            assert_eq!(bits(&f1), bits(&f2), "variant {v}: forces");
+            assert_eq!(bits(&k1.values), bits(&k2.values), "variant {v}: tangent");
+            assert_eq!(s1, s2, "variant {v}: statistics");
+            assert_eq!(h1, histories(c), "variant {v}: histories");
+            assert_eq!(nodal1, nodal_bits(&c.trial_nodal), "variant {v}: nodal results");
         }
     }
 }

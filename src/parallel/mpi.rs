@@ -2,9 +2,22 @@
 
 use super::Collective;
 use mpi::collective::SystemOperation;
+use mpi::datatype::PartitionMut;
 use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use mpi::Count;
+
+/// Offsets of consecutive blocks of the given lengths, and their total.
+fn displacements(counts: &[Count]) -> (Vec<Count>, usize) {
+    let mut displs = Vec::with_capacity(counts.len());
+    let mut at: Count = 0;
+    for &c in counts {
+        displs.push(at);
+        at += c;
+    }
+    (displs, at as usize)
+}
 
 /// MPI's world communicator. Owns the MPI environment: MPI finalises when it is dropped.
 pub struct MpiCollective {
@@ -94,6 +107,40 @@ impl Collective for MpiCollective {
                 }
             }
         }
+    }
+
+    fn all_gather_varcount(&self, local: &[f64]) -> Vec<f64> {
+        if self.size <= 1 {
+            return local.to_vec();
+        }
+        let n = local.len() as Count;
+        let mut counts = vec![0 as Count; self.size];
+        self.world.all_gather_into(&n, &mut counts[..]);
+        let (displs, total) = displacements(&counts);
+        let mut out = vec![0.0; total];
+        let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+        self.world.all_gather_varcount_into(local, &mut part);
+        out
+    }
+
+    fn gather_varcount_to_root(&self, local: &[f64]) -> Vec<f64> {
+        if self.size <= 1 {
+            return local.to_vec();
+        }
+        let root = self.world.process_at_rank(0);
+        let n = local.len() as Count;
+        if self.rank != 0 {
+            root.gather_into(&n);
+            root.gather_varcount_into(local);
+            return Vec::new();
+        }
+        let mut counts = vec![0 as Count; self.size];
+        root.gather_into_root(&n, &mut counts[..]);
+        let (displs, total) = displacements(&counts);
+        let mut out = vec![0.0; total];
+        let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+        root.gather_varcount_into_root(local, &mut part);
+        out
     }
 
     fn min_u64(&self, x: u64) -> u64 {
