@@ -221,8 +221,9 @@ fn write_whole<T: Value>(g: &hdf5::Group, name: &str, shape: Vec<usize>, v: &[T]
     g.new_dataset::<T>().shape(shape).create(name).expect("dataset").write_raw(v).expect("write");
 }
 
-/// (a) gather to rank 0, which writes alone with the default driver.
-fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path) -> f64 {
+/// (a) gather to rank 0, which writes alone with the default driver. Returns the time and,
+/// on rank 0, the part of it spent in the gathers.
+fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path) -> (f64, f64) {
     world.barrier();
     let t0 = Instant::now();
     let mut full = Vec::with_capacity(SPECS.len());
@@ -234,6 +235,7 @@ fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path) -> f64 {
             Data::I32(v) => Data::I32(gather_one(world, v, s.width, rows)),
         });
     }
+    let t_gather = t0.elapsed().as_secs_f64();
     if world.rank() == 0 {
         let file = serial_builder().create(path).expect("create");
         let g = step_group(&file).expect("group");
@@ -253,7 +255,7 @@ fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path) -> f64 {
     }
     let t = t0.elapsed().as_secs_f64();
     sleepy_barrier(world);
-    max_time(world, t)
+    (max_time(world, t), t_gather)
 }
 
 /// Rank 0 gets the largest of the ranks' times.
@@ -457,6 +459,8 @@ fn main() {
         let bytes = step.bytes();
         let values = bytes / 8;
         let mut times = vec![Vec::new(); METHODS.len()];
+        let mut gather_times = Vec::new();
+        let sync = u8::from(std::env::var("SYNC").as_deref() == Ok("1"));
         // repetition 0 is a warm-up (first touch of the buffers, the library's set-up), not kept
         for rep in 0..=reps {
             // a different method first in each repetition, so that the write-back of the
@@ -464,8 +468,13 @@ fn main() {
             for k in 0..METHODS.len() {
                 let m = (k + rep) % METHODS.len();
                 let path = dir.join(format!("{}-{nodes}-{rep}.h5", METHODS[m]));
+                let mut t_gather = f64::NAN;
                 let t = match m {
-                    0 => gathered(&world, &step, &path),
+                    0 => {
+                        let (t, g) = gathered(&world, &step, &path);
+                        t_gather = g;
+                        t
+                    }
                     1 => parallel(&world, &step, &path, true),
                     2 => parallel(&world, &step, &path, false),
                     _ => bare(&world, values, &path),
@@ -474,13 +483,17 @@ fn main() {
                     let checked = if m == 3 { check_bare(values, &path) } else { check_step(&step, &path) };
                     let on_disk = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
                     eprintln!(
-                        "ranks {size} nodes {nodes} rep {rep} {:<21} {:8.1} ms  ({checked} values checked, file {on_disk} bytes)",
+                        "sync {sync} ranks {size} nodes {nodes} rep {rep} {:<21} {:8.1} ms{}  ({checked} values checked, file {on_disk} bytes)",
                         METHODS[m],
-                        t * 1e3
+                        t * 1e3,
+                        if m == 0 { format!(" (gather {:.1} ms)", t_gather * 1e3) } else { String::new() }
                     );
                     std::fs::remove_file(&path).expect("remove");
                     if rep > 0 {
                         times[m].push(t);
+                        if m == 0 {
+                            gather_times.push(t_gather);
+                        }
                     }
                 }
                 sleepy_barrier(&world);
@@ -491,9 +504,9 @@ fn main() {
                 let t = &times[m];
                 let min = t.iter().cloned().fold(f64::INFINITY, f64::min);
                 let all: Vec<String> = t.iter().map(|x| format!("{:.1}", x * 1e3)).collect();
+                let gather = if m == 0 { format!(" gather_median_ms={:.1}", median(&gather_times) * 1e3) } else { String::new() };
                 println!(
-                    "RESULT sync={} ranks={size} nodes={nodes} cells={cells} bytes={bytes} method={name} median_ms={:.1} min_ms={:.1} all_ms={}",
-                    u8::from(std::env::var("SYNC").as_deref() == Ok("1")),
+                    "RESULT sync={sync} ranks={size} nodes={nodes} cells={cells} bytes={bytes} method={name} median_ms={:.1} min_ms={:.1} all_ms={}{gather}",
                     median(t) * 1e3,
                     min * 1e3,
                     all.join(",")
