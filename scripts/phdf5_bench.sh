@@ -63,24 +63,25 @@ echo "after:  $(uptime)"
 
 # one row a (nodes, ranks, sync): median (min) in ms of each method
 echo
-echo "| nodes | bytes per step | ranks | to | gathered | of which gather | parallel, collective | parallel, independent | bare (1 rank) |"
-echo "|--:|--:|--:|--|--:|--:|--:|--:|--:|"
+echo "| nodes | bytes per step | ranks | to | gathered | (gather) | gathered, buffers reused | (gather) | parallel, collective | parallel, independent | bare (1 rank) |"
+echo "|--:|--:|--:|--|--:|--:|--:|--:|--:|--:|--:|"
 awk '
 /^RESULT/ {
     for (i = 2; i <= NF; i++) { split($i, kv, "="); f[kv[1]] = kv[2] }
     key = f["nodes"] " " f["ranks"] " " f["sync"]
     if (!(key in seen)) { seen[key] = 1; order[++n] = key; bytes[key] = f["bytes"] }
     cell[key, f["method"]] = sprintf("%.1f (%.1f)", f["median_ms"], f["min_ms"])
-    if ("gather_median_ms" in f) gather[key] = sprintf("%.1f", f["gather_median_ms"])
+    if ("gather_median_ms" in f) gather[key, f["method"]] = sprintf("%.1f", f["gather_median_ms"])
     delete f
 }
 END {
     for (k = 1; k <= n; k++) {
         key = order[k]; split(key, p, " ")
-        printf "| %s | %.1f MB | %s | %s | %s | %s | %s | %s | %s |\n", p[1], bytes[key] / 1e6, p[2],
-            (p[3] == 1 ? "fsync" : "close"), cell[key, "gathered"], gather[key], cell[key, "parallel_collective"],
+        printf "| %s | %.1f MB | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", p[1], bytes[key] / 1e6, p[2],
+            (p[3] == 1 ? "fsync" : "close"), cell[key, "gathered"], gather[key, "gathered"],
+            cell[key, "gathered_reused"], gather[key, "gathered_reused"], cell[key, "parallel_collective"],
             cell[key, "parallel_independent"], cell[key, "bare"]
     }
 }' "$out" | sort -t'|' -k2,2n -k4,4n -k5,5
 echo
-echo "(median (min) ms of $REPS repetitions after a warm-up; each from a barrier to the close of the file, or to its fsync; the gather column is the median of the gathers alone)"
+echo "(median (min) ms of $REPS repetitions after a warm-up; each from a barrier to the close of the file, or to its fsync; (gather) is the median of the gathers alone)"

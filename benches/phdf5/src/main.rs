@@ -4,6 +4,8 @@
 //! * `gathered`: every rank holds its 1/P of each dataset; they are gathered to rank 0
 //!   (`MPI_Gatherv`, one a dataset), which writes the file alone through HDF5's default
 //!   (sec2) driver. The time includes the gather.
+//! * `gathered_reused`: the same, with rank 0's receive buffers allocated once and reused
+//!   (the gathers then copy into memory already mapped).
 //! * `parallel_collective` and `parallel_independent`: the file is opened on all ranks through
 //!   the MPI-IO driver and each rank writes its rows of each dataset (a hyperslab) with a
 //!   collective, or an independent, transfer.
@@ -193,7 +195,9 @@ fn step_group(file: &hdf5::File) -> hdf5::Result<hdf5::Group> {
     Ok(g)
 }
 
-fn gather_one<T: Value>(world: &SimpleCommunicator, local: &[T], width: usize, rows: usize) -> Vec<T> {
+/// Gathers one dataset into `all` on rank 0. An `all` of the wrong length (a fresh one) is
+/// replaced by a new allocation, whose pages are first touched by the gather itself.
+fn gather_one<T: Value>(world: &SimpleCommunicator, local: &[T], width: usize, rows: usize, all: &mut Vec<T>) {
     let size = world.size() as usize;
     let root = world.process_at_rank(0);
     if world.rank() == 0 {
@@ -204,15 +208,13 @@ fn gather_one<T: Value>(world: &SimpleCommunicator, local: &[T], width: usize, r
             })
             .collect();
         let displs: Vec<i32> = (0..size).map(|r| (share(rows, r, size).0 * width) as i32).collect();
-        let mut all = vec![T::default(); rows * width];
-        {
-            let mut part = PartitionMut::new(&mut all[..], counts, displs);
-            root.gather_varcount_into_root(local, &mut part);
+        if all.len() != rows * width {
+            *all = vec![T::default(); rows * width];
         }
-        all
+        let mut part = PartitionMut::new(&mut all[..], counts, displs);
+        root.gather_varcount_into_root(local, &mut part);
     } else {
         root.gather_varcount_into(local);
-        Vec::new()
     }
 }
 
@@ -221,25 +223,36 @@ fn write_whole<T: Value>(g: &hdf5::Group, name: &str, shape: Vec<usize>, v: &[T]
     g.new_dataset::<T>().shape(shape).create(name).expect("dataset").write_raw(v).expect("write");
 }
 
-/// (a) gather to rank 0, which writes alone with the default driver. Returns the time and,
+/// (a) gather to rank 0, which writes alone with the default driver. `full` holds rank 0's
+/// receive buffers: empty for new ones (allocated inside the timing, as a writer that builds
+/// its arrays each step would), or those of an earlier call, reused. Returns the time and,
 /// on rank 0, the part of it spent in the gathers.
-fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path) -> (f64, f64) {
+fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path, full: &mut Vec<Data>) -> (f64, f64) {
+    if full.is_empty() {
+        for s in &SPECS {
+            full.push(match s.kind {
+                Kind::F64 => Data::F64(Vec::new()),
+                Kind::I64 => Data::I64(Vec::new()),
+                Kind::I32 => Data::I32(Vec::new()),
+            });
+        }
+    }
     world.barrier();
     let t0 = Instant::now();
-    let mut full = Vec::with_capacity(SPECS.len());
-    for (s, data) in SPECS.iter().zip(&step.local) {
+    for ((s, data), all) in SPECS.iter().zip(&step.local).zip(full.iter_mut()) {
         let rows = step.rows(s);
-        full.push(match data {
-            Data::F64(v) => Data::F64(gather_one(world, v, s.width, rows)),
-            Data::I64(v) => Data::I64(gather_one(world, v, s.width, rows)),
-            Data::I32(v) => Data::I32(gather_one(world, v, s.width, rows)),
-        });
+        match (data, all) {
+            (Data::F64(v), Data::F64(a)) => gather_one(world, v, s.width, rows, a),
+            (Data::I64(v), Data::I64(a)) => gather_one(world, v, s.width, rows, a),
+            (Data::I32(v), Data::I32(a)) => gather_one(world, v, s.width, rows, a),
+            _ => unreachable!(),
+        }
     }
     let t_gather = t0.elapsed().as_secs_f64();
     if world.rank() == 0 {
         let file = serial_builder().create(path).expect("create");
         let g = step_group(&file).expect("group");
-        for (s, data) in SPECS.iter().zip(&full) {
+        for (s, data) in SPECS.iter().zip(full.iter()) {
             let rows = step.rows(s);
             let shape = if s.width == 1 { vec![rows] } else { vec![rows, s.width] };
             match data {
@@ -433,7 +446,7 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-const METHODS: [&str; 4] = ["gathered", "parallel_collective", "parallel_independent", "bare"];
+const METHODS: [&str; 5] = ["gathered", "gathered_reused", "parallel_collective", "parallel_independent", "bare"];
 
 fn main() {
     let universe = mpi::initialize().expect("MPI");
@@ -459,7 +472,9 @@ fn main() {
         let bytes = step.bytes();
         let values = bytes / 8;
         let mut times = vec![Vec::new(); METHODS.len()];
-        let mut gather_times = Vec::new();
+        let mut gather_times = vec![Vec::new(); 2];
+        // rank 0's receive buffers for `gathered_reused`, first touched in the warm-up
+        let mut reused = Vec::new();
         let sync = u8::from(std::env::var("SYNC").as_deref() == Ok("1"));
         // repetition 0 is a warm-up (first touch of the buffers, the library's set-up), not kept
         for rep in 0..=reps {
@@ -470,29 +485,31 @@ fn main() {
                 let path = dir.join(format!("{}-{nodes}-{rep}.h5", METHODS[m]));
                 let mut t_gather = f64::NAN;
                 let t = match m {
-                    0 => {
-                        let (t, g) = gathered(&world, &step, &path);
+                    0 | 1 => {
+                        let mut fresh = Vec::new();
+                        let full = if m == 0 { &mut fresh } else { &mut reused };
+                        let (t, g) = gathered(&world, &step, &path, full);
                         t_gather = g;
                         t
                     }
-                    1 => parallel(&world, &step, &path, true),
-                    2 => parallel(&world, &step, &path, false),
+                    2 => parallel(&world, &step, &path, true),
+                    3 => parallel(&world, &step, &path, false),
                     _ => bare(&world, values, &path),
                 };
                 if rank == 0 {
-                    let checked = if m == 3 { check_bare(values, &path) } else { check_step(&step, &path) };
+                    let checked = if m == 4 { check_bare(values, &path) } else { check_step(&step, &path) };
                     let on_disk = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
                     eprintln!(
                         "sync {sync} ranks {size} nodes {nodes} rep {rep} {:<21} {:8.1} ms{}  ({checked} values checked, file {on_disk} bytes)",
                         METHODS[m],
                         t * 1e3,
-                        if m == 0 { format!(" (gather {:.1} ms)", t_gather * 1e3) } else { String::new() }
+                        if m < 2 { format!(" (gather {:.1} ms)", t_gather * 1e3) } else { String::new() }
                     );
                     std::fs::remove_file(&path).expect("remove");
                     if rep > 0 {
                         times[m].push(t);
-                        if m == 0 {
-                            gather_times.push(t_gather);
+                        if m < 2 {
+                            gather_times[m].push(t_gather);
                         }
                     }
                 }
@@ -504,7 +521,7 @@ fn main() {
                 let t = &times[m];
                 let min = t.iter().cloned().fold(f64::INFINITY, f64::min);
                 let all: Vec<String> = t.iter().map(|x| format!("{:.1}", x * 1e3)).collect();
-                let gather = if m == 0 { format!(" gather_median_ms={:.1}", median(&gather_times) * 1e3) } else { String::new() };
+                let gather = if m < 2 { format!(" gather_median_ms={:.1}", median(&gather_times[m]) * 1e3) } else { String::new() };
                 println!(
                     "RESULT sync={sync} ranks={size} nodes={nodes} cells={cells} bytes={bytes} method={name} median_ms={:.1} min_ms={:.1} all_ms={}{gather}",
                     median(t) * 1e3,
