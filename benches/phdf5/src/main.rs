@@ -1,5 +1,5 @@
-//! One mpfem output step written three ways on the ranks of `mpirun -n P`, for about 10⁵ and
-//! 10⁶ nodes, to answer "parallel HDF5 or a gathered write?" on this machine:
+//! One mpfem output step written five ways (three writers) on the ranks of `mpirun -n P`, for
+//! about 10⁵ and 10⁶ nodes, to answer "parallel HDF5 or a gathered write?" on this machine:
 //!
 //! * `gathered`: every rank holds its 1/P of each dataset; they are gathered to rank 0
 //!   (`MPI_Gatherv`, one a dataset), which writes the file alone through HDF5's default
@@ -55,7 +55,12 @@ struct Spec {
 }
 
 const fn spec(name: &'static str, per_node: bool, width: usize, kind: Kind) -> Spec {
-    Spec { name, per_node, width, kind }
+    Spec {
+        name,
+        per_node,
+        width,
+        kind,
+    }
 }
 
 const SPECS: [Spec; 14] = [
@@ -134,7 +139,11 @@ impl Step {
                 }
             })
             .collect();
-        Step { nodes, cells, local }
+        Step {
+            nodes,
+            cells,
+            local,
+        }
     }
     fn rows(&self, s: &Spec) -> usize {
         if s.per_node {
@@ -178,7 +187,9 @@ fn sleepy_barrier(world: &SimpleCommunicator) {
 /// fsync covers the bytes every rank wrote.
 fn sync_if_asked(world: &SimpleCommunicator, path: &Path) {
     if world.rank() == 0 && std::env::var("SYNC").as_deref() == Ok("1") {
-        std::fs::File::open(path).and_then(|f| f.sync_all()).expect("fsync");
+        std::fs::File::open(path)
+            .and_then(|f| f.sync_all())
+            .expect("fsync");
     }
 }
 
@@ -197,7 +208,13 @@ fn step_group(file: &hdf5::File) -> hdf5::Result<hdf5::Group> {
 
 /// Gathers one dataset into `all` on rank 0. An `all` of the wrong length (a fresh one) is
 /// replaced by a new allocation, whose pages are first touched by the gather itself.
-fn gather_one<T: Value>(world: &SimpleCommunicator, local: &[T], width: usize, rows: usize, all: &mut Vec<T>) {
+fn gather_one<T: Value>(
+    world: &SimpleCommunicator,
+    local: &[T],
+    width: usize,
+    rows: usize,
+    all: &mut Vec<T>,
+) {
     let size = world.size() as usize;
     let root = world.process_at_rank(0);
     if world.rank() == 0 {
@@ -207,7 +224,9 @@ fn gather_one<T: Value>(world: &SimpleCommunicator, local: &[T], width: usize, r
                 ((hi - lo) * width) as i32
             })
             .collect();
-        let displs: Vec<i32> = (0..size).map(|r| (share(rows, r, size).0 * width) as i32).collect();
+        let displs: Vec<i32> = (0..size)
+            .map(|r| (share(rows, r, size).0 * width) as i32)
+            .collect();
         if all.len() != rows * width {
             *all = vec![T::default(); rows * width];
         }
@@ -220,14 +239,24 @@ fn gather_one<T: Value>(world: &SimpleCommunicator, local: &[T], width: usize, r
 
 /// A whole dataset from one process, as `ResultsWriter::write_step` writes it.
 fn write_whole<T: Value>(g: &hdf5::Group, name: &str, shape: Vec<usize>, v: &[T]) {
-    g.new_dataset::<T>().shape(shape).create(name).expect("dataset").write_raw(v).expect("write");
+    g.new_dataset::<T>()
+        .shape(shape)
+        .create(name)
+        .expect("dataset")
+        .write_raw(v)
+        .expect("write");
 }
 
 /// (a) gather to rank 0, which writes alone with the default driver. `full` holds rank 0's
 /// receive buffers: empty for new ones (allocated inside the timing, as a writer that builds
 /// its arrays each step would), or those of an earlier call, reused. Returns the time and,
 /// on rank 0, the part of it spent in the gathers.
-fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path, full: &mut Vec<Data>) -> (f64, f64) {
+fn gathered(
+    world: &SimpleCommunicator,
+    step: &Step,
+    path: &Path,
+    full: &mut Vec<Data>,
+) -> (f64, f64) {
     if full.is_empty() {
         for s in &SPECS {
             full.push(match s.kind {
@@ -254,7 +283,11 @@ fn gathered(world: &SimpleCommunicator, step: &Step, path: &Path, full: &mut Vec
         let g = step_group(&file).expect("group");
         for (s, data) in SPECS.iter().zip(full.iter()) {
             let rows = step.rows(s);
-            let shape = if s.width == 1 { vec![rows] } else { vec![rows, s.width] };
+            let shape = if s.width == 1 {
+                vec![rows]
+            } else {
+                vec![rows, s.width]
+            };
             match data {
                 Data::F64(v) => write_whole(&g, s.name, shape, v),
                 Data::I64(v) => write_whole(&g, s.name, shape, v),
@@ -308,7 +341,14 @@ fn write_rows<T: Value>(ds: &hdf5::Dataset, local: &[T], width: usize, lo: usize
         let n = local.len() as u64;
         let mspace = H5Screate_simple(1, &n, std::ptr::null());
         assert!(mspace >= 0);
-        let e = H5Dwrite(ds.id(), mem_type.id(), mspace, fspace, dxpl, local.as_ptr().cast());
+        let e = H5Dwrite(
+            ds.id(),
+            mem_type.id(),
+            mspace,
+            fspace,
+            dxpl,
+            local.as_ptr().cast(),
+        );
         assert!(e >= 0, "H5Dwrite");
         H5Sclose(mspace);
         H5Sclose(fspace);
@@ -341,18 +381,34 @@ fn parallel(world: &SimpleCommunicator, step: &Step, path: &Path, collective: bo
     for (s, data) in SPECS.iter().zip(&step.local) {
         let rows = step.rows(s);
         let (lo, _) = share(rows, rank, size);
-        let shape = if s.width == 1 { vec![rows] } else { vec![rows, s.width] };
+        let shape = if s.width == 1 {
+            vec![rows]
+        } else {
+            vec![rows, s.width]
+        };
         match data {
             Data::F64(v) => {
-                let ds = g.new_dataset::<f64>().shape(shape).create(s.name).expect("dataset");
+                let ds = g
+                    .new_dataset::<f64>()
+                    .shape(shape)
+                    .create(s.name)
+                    .expect("dataset");
                 write_rows(&ds, v, s.width, lo, dxpl);
             }
             Data::I64(v) => {
-                let ds = g.new_dataset::<i64>().shape(shape).create(s.name).expect("dataset");
+                let ds = g
+                    .new_dataset::<i64>()
+                    .shape(shape)
+                    .create(s.name)
+                    .expect("dataset");
                 write_rows(&ds, v, s.width, lo, dxpl);
             }
             Data::I32(v) => {
-                let ds = g.new_dataset::<i32>().shape(shape).create(s.name).expect("dataset");
+                let ds = g
+                    .new_dataset::<i32>()
+                    .shape(shape)
+                    .create(s.name)
+                    .expect("dataset");
                 write_rows(&ds, v, s.width, lo, dxpl);
             }
         }
@@ -393,7 +449,11 @@ fn bare(world: &SimpleCommunicator, values: usize, path: &Path) -> f64 {
 
 fn check_one<T: Value>(g: &hdf5::Group, s: &Spec, d: usize, rows: usize) -> usize {
     let ds = g.dataset(s.name).expect("dataset in file");
-    let want_shape = if s.width == 1 { vec![rows] } else { vec![rows, s.width] };
+    let want_shape = if s.width == 1 {
+        vec![rows]
+    } else {
+        vec![rows, s.width]
+    };
     assert_eq!(ds.shape(), want_shape, "{}", s.name);
     let v: Vec<T> = ds.read_raw().expect("read");
     assert_eq!(v.len(), rows * s.width);
@@ -430,7 +490,10 @@ fn check_bare(values: usize, path: &Path) -> usize {
     let sum: f64 = v.iter().sum();
     // Σ 0.5 j for j < n, exact in f64 at these sizes
     let want = 0.25 * (values as f64) * (values as f64 - 1.0);
-    assert!((sum - want).abs() <= 1e-9 * want, "bare sum {sum} vs {want}");
+    assert!(
+        (sum - want).abs() <= 1e-9 * want,
+        "bare sum {sum} vs {want}"
+    );
     assert_eq!(v[values - 1], f64::at(0, values - 1));
     v.len()
 }
@@ -446,14 +509,23 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-const METHODS: [&str; 5] = ["gathered", "gathered_reused", "parallel_collective", "parallel_independent", "bare"];
+const METHODS: [&str; 5] = [
+    "gathered",
+    "gathered_reused",
+    "parallel_collective",
+    "parallel_independent",
+    "bare",
+];
 
 fn main() {
     let universe = mpi::initialize().expect("MPI");
     let world = universe.world();
     let rank = world.rank();
     let size = world.size() as usize;
-    let reps: usize = std::env::var("REPS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
+    let reps: usize = std::env::var("REPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(5);
     let sizes: &[(usize, usize)] = match std::env::var("SIZES").as_deref() {
         Ok("small") => &SIZES[..1],
         _ => &SIZES[..],
@@ -461,7 +533,9 @@ fn main() {
     // one folder for all ranks, named after rank 0's process id
     let mut pid = std::process::id();
     world.process_at_rank(0).broadcast_into(&mut pid);
-    let base = std::env::var_os("PHDF5_DIR").map(PathBuf::from).unwrap_or_else(std::env::temp_dir);
+    let base = std::env::var_os("PHDF5_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir);
     let dir = base.join(format!("phdf5-bench-{pid}"));
     if rank == 0 {
         std::fs::create_dir_all(&dir).expect("temp folder");
@@ -497,7 +571,11 @@ fn main() {
                     _ => bare(&world, values, &path),
                 };
                 if rank == 0 {
-                    let checked = if m == 4 { check_bare(values, &path) } else { check_step(&step, &path) };
+                    let checked = if m == 4 {
+                        check_bare(values, &path)
+                    } else {
+                        check_step(&step, &path)
+                    };
                     let on_disk = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
                     eprintln!(
                         "sync {sync} ranks {size} nodes {nodes} rep {rep} {:<21} {:8.1} ms{}  ({checked} values checked, file {on_disk} bytes)",
@@ -521,7 +599,11 @@ fn main() {
                 let t = &times[m];
                 let min = t.iter().cloned().fold(f64::INFINITY, f64::min);
                 let all: Vec<String> = t.iter().map(|x| format!("{:.1}", x * 1e3)).collect();
-                let gather = if m < 2 { format!(" gather_median_ms={:.1}", median(&gather_times[m]) * 1e3) } else { String::new() };
+                let gather = if m < 2 {
+                    format!(" gather_median_ms={:.1}", median(&gather_times[m]) * 1e3)
+                } else {
+                    String::new()
+                };
                 println!(
                     "RESULT sync={sync} ranks={size} nodes={nodes} cells={cells} bytes={bytes} method={name} median_ms={:.1} min_ms={:.1} all_ms={}{gather}",
                     median(t) * 1e3,
