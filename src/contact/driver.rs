@@ -704,7 +704,7 @@ impl ContactProblem {
                         };
                         if lambda > 0.0 && lambda - c * sout.gap > 0.0 && sout.active {
                             if let Some((m, eq, _)) = kk.as_mut() {
-                                add_block(m, eq, &dofs, &sout.k);
+                                add_block(m, eq, &dofs, sout.k.as_flattened());
                             }
                         }
                         (dofs.to_vec(), grad, row, sout.gap, area, c)
@@ -725,7 +725,7 @@ impl ContactProblem {
                             let hist = PairHistory { xi_stick: xi, lambda_n: lambda, lambda_t: 0.0, active: true };
                             kernels::nts_pair(xs, x1, x2, area, ContactKind::Sliding, &no_penalty, &hist, &mut out);
                             if let Some((m, eq, _)) = kk.as_mut() {
-                                add_block(m, eq, &[dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]], &out.k);
+                                add_block(m, eq, &[dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]], out.k.as_flattened());
                             }
                         }
                         (dofs, grad.clone(), grad, g.gap, area, c)
@@ -884,7 +884,7 @@ impl ContactProblem {
                 smooth::nts_smooth_pair(x[node], &master, self.area[p.slave] * p.weight, kind, &params, &old, &mut sout);
                 if tangent && sout.active {
                     nts_k.push(k as f64);
-                    sout.k.iter().for_each(|row| nts_k.extend_from_slice(row));
+                    nts_k.extend_from_slice(sout.k.as_flattened());
                     n_nts_k += 1;
                 }
                 (&sout.f, sout.gap, sout.pressure, sout.shear, sout.slip, sout.active, sout.new_history, smooth::augment(&sout))
@@ -892,7 +892,7 @@ impl ContactProblem {
                 kernels::nts_pair(x[node], x[s.nodes[0]], x[s.nodes[1]], self.area[p.slave] * p.weight, kind, &params, &old, &mut out);
                 if tangent && out.active {
                     nts_k.push(k as f64);
-                    out.k.iter().for_each(|row| nts_k.extend_from_slice(row));
+                    nts_k.extend_from_slice(out.k.as_flattened());
                     n_nts_k += 1;
                 }
                 (&out.f, out.gap, out.pressure, out.shear, out.slip, out.active, out.new_history, kernels::augment(&old, &out))
@@ -919,10 +919,12 @@ impl ContactProblem {
                     continue;
                 }
                 let old = self.wall_hist[w][i];
+                let mut eps_t = 0.0;
                 let (new, aug, evaluated) = if self.untied_wall(spec, &wall, x[node], body, &old) {
                     (PairHistory::default(), old, false)
                 } else {
                     let params = self.params(body, None);
+                    eps_t = params.eps_t;
                     kernels::node_wall(x[node], &wall, 0.0, self.area[i], spec.kind, &params, &old, &mut wout);
                     let g = wout.gap;
                     if g.is_finite() && !(wall_gap[i] <= g) {
@@ -937,7 +939,7 @@ impl ContactProblem {
                     walls.push((w * ns + i) as f64);
                     if evaluated {
                         walls.extend_from_slice(&wout.f);
-                        let viol = if active { violation(spec.kind, wout.gap, wout.shear, wout.slip, &old, self.params(body, None).eps_t) } else { 0.0 };
+                        let viol = if active { violation(spec.kind, wout.gap, wout.shear, wout.slip, &old, eps_t) } else { 0.0 };
                         walls.extend_from_slice(&[wout.gap, wout.pressure, viol, f64::from(u8::from(wout.slip)), f64::from(u8::from(active))]);
                     } else {
                         walls.extend_from_slice(&[0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0]);
@@ -948,7 +950,7 @@ impl ContactProblem {
                 }
                 if tangent && active {
                     walls_k.push((w * ns + i) as f64);
-                    walls_k.extend(wout.k.iter().flatten());
+                    walls_k.extend_from_slice(wout.k.as_flattened());
                     n_walls_k += 1;
                 }
             }
@@ -1020,7 +1022,7 @@ impl ContactProblem {
                     f_int[dofs[i]] += f[i];
                 }
                 if let (Some((m, eq, _)), Some(b)) = (kk.as_mut(), block) {
-                    add_block_flat(m, eq, &dofs, b);
+                    add_block(m, eq, &dofs, b);
                 }
             } else {
                 self.trial_nodal.force(&[node, s.nodes[0], s.nodes[1]], f);
@@ -1029,7 +1031,7 @@ impl ContactProblem {
                     f_int[dofs[i]] += f[i];
                 }
                 if let (Some((m, eq, _)), Some(b)) = (kk.as_mut(), block) {
-                    add_block_flat(m, eq, &dofs, b);
+                    add_block(m, eq, &dofs, b);
                 }
             }
         }
@@ -1077,7 +1079,7 @@ impl ContactProblem {
                     next_block.next();
                 }
                 if let Some(b) = next_block.next_if(|b| b[0] as usize == key) {
-                    add_block_flat(m, eq, &dofs, &b[1..]);
+                    add_block(m, eq, &dofs, &b[1..]);
                 }
             }
         }
@@ -1368,26 +1370,8 @@ impl ContactProblem {
     }
 }
 
-fn add_block<const N: usize>(m: &mut CsrMatrix, eq: &[usize], dofs: &[usize; N], k: &[[f64; N]; N]) {
-    for a in 0..N {
-        let r = eq[dofs[a]];
-        if r == FIXED {
-            continue;
-        }
-        for b in 0..N {
-            let c = eq[dofs[b]];
-            if c == FIXED {
-                continue;
-            }
-            if let Some(pos) = m.find(r, c) {
-                m.values[pos] += k[a][b];
-            }
-        }
-    }
-}
-
-/// [`add_block`] for a row-major block of `dofs.len()`² values.
-fn add_block_flat<const N: usize>(m: &mut CsrMatrix, eq: &[usize], dofs: &[usize; N], k: &[f64]) {
+/// Add the row-major N × N block `k` (rows and columns: `dofs`) to `m`, skipping fixed dofs.
+fn add_block<const N: usize>(m: &mut CsrMatrix, eq: &[usize], dofs: &[usize; N], k: &[f64]) {
     let n = N;
     for a in 0..n {
         let r = eq[dofs[a]];
