@@ -319,7 +319,7 @@ impl Checkpoint {
     /// # Errors
     /// [`CheckpointError::Mismatch`] when the checkpoint does not fit the model.
     pub fn restore(self, base: Model, time: TimeSpec, spec: SolverSpec) -> Result<Simulation, CheckpointError> {
-        self.restore_with(base, time, spec, std::sync::Arc::new(crate::parallel::Serial))
+        self.restore_with(base, time, spec, std::sync::Arc::new(crate::comm::Serial))
     }
 
     /// [`Checkpoint::restore`] on the processes `comm` (every rank reads the same global
@@ -327,7 +327,7 @@ impl Checkpoint {
     ///
     /// # Errors
     /// As [`Checkpoint::restore`].
-    pub fn restore_with(self, base: Model, time: TimeSpec, spec: SolverSpec, comm: std::sync::Arc<dyn crate::parallel::Collective>) -> Result<Simulation, CheckpointError> {
+    pub fn restore_with(self, base: Model, time: TimeSpec, spec: SolverSpec, comm: std::sync::Arc<dyn crate::comm::Collective>) -> Result<Simulation, CheckpointError> {
         let model = self.model(base)?;
         let path = self.path.clone();
         let mismatch = |reason: String| CheckpointError::Mismatch { path: path.clone(), reason };

@@ -23,6 +23,7 @@ pub mod assembly;
 pub mod bench_support;
 pub mod case;
 pub mod checkpoint;
+pub mod comm;
 pub mod contact;
 pub mod distribute;
 pub mod dynamics;

@@ -108,7 +108,7 @@ pub struct SolveStats {
 
 /// Build the solver chosen in the options.
 pub fn make_solver(opts: &SolverOptions) -> Box<dyn LinearSolver> {
-    make_solver_with(opts, schwarz::Subdomains::default(), std::sync::Arc::new(crate::parallel::Serial))
+    make_solver_with(opts, schwarz::Subdomains::default(), std::sync::Arc::new(crate::comm::Serial))
 }
 
 /// Build the solver chosen in the options, with the particles as the subdomains of the
@@ -117,7 +117,7 @@ pub fn make_solver(opts: &SolverOptions) -> Box<dyn LinearSolver> {
 pub fn make_solver_with(
     opts: &SolverOptions,
     subdomains: schwarz::Subdomains,
-    comm: std::sync::Arc<dyn crate::parallel::Collective>,
+    comm: std::sync::Arc<dyn crate::comm::Collective>,
 ) -> Box<dyn LinearSolver> {
     match opts.kind {
         LinearSolverKind::Pcg if opts.preconditioner == Preconditioner::Schwarz => {

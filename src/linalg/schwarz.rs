@@ -39,7 +39,7 @@
 use super::csr::PatternStamp;
 use super::direct::{FaerCholesky, FaerLu, Refinement};
 use super::*;
-use crate::parallel::Collective;
+use crate::comm::Collective;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -1001,7 +1001,7 @@ impl SchwarzPcg {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::parallel::Serial;
+    use crate::comm::Serial;
 
     /// A chain of `m` elastic bars of `k` nodes each along x (2 dofs per node, a unit spring
     /// between neighbours in both directions inside a bar, a stiff spring `kc` between the last
