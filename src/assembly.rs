@@ -1,21 +1,35 @@
-//! Degree-of-freedom numbering, the sparsity pattern (built once per topology) and the
-//! parallel assembly of internal forces and tangent stiffness.
+//! The one assembler of the global system: the degree-of-freedom numbering, the one sparsity
+//! pattern every force term adds into, and the scatter of the local contributions.
+//!
+//! Every term of the system is a list of local contributions with its own connectivity (the
+//! dofs it touches) and fixed-size scratch: the element kernels (8 dofs), the contact pairs (6
+//! or 10), the wall pairs (2), the stabilisation springs and the inertia (1: the diagonal),
+//! the follower loads (4), the Lagrange multiplier rows (the pair's dofs and the multiplier).
+//! The pattern is the elements' couplings plus those of the terms whose connectivity changes
+//! (contact pairs, multipliers); a change of pairs updates it incrementally
+//! ([`Assembler::set_terms`]: the element couplings are merged with the new ones and the
+//! element scatter remapped, nothing is rebuilt from the mesh). The positions of every other
+//! term's entries are found once per pattern ([`BlockMap`]), so adding a contribution never
+//! searches.
 //!
 //! Elements are coloured once per topology so that no two elements of one colour share a node.
 //! Colours are processed one after the other; inside a colour the elements are evaluated and
 //! scattered in parallel (rayon, on a pool the caller passes in, or sequentially) without any
 //! write conflict. Every matrix or vector entry therefore receives its contributions in colour
-//! order, whatever the thread count: 1 and N threads give bit-identical results.
+//! order, whatever the thread count: 1 and N threads give bit-identical results. The other
+//! terms are cheap next to the elements and are added after them, in a fixed order (see
+//! [`crate::solver`]), which keeps a run on any number of processes bit-identical to the serial
+//! one.
 
 use crate::element::{self, ElementKind, ElementOut, Volumetric, N_ENH};
-use crate::linalg::CsrMatrix;
+use crate::linalg::{BlockMap, CsrMatrix, NO_ROW};
 use crate::material::{MatState, MaterialError, TimeIncrement};
 use crate::model::Model;
 use rayon::prelude::*;
 use thiserror::Error;
 
 /// Marker for a constrained degree of freedom in the equation map.
-pub const FIXED: usize = usize::MAX;
+pub const FIXED: usize = NO_ROW;
 
 
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -68,19 +82,28 @@ impl ElementFields {
     }
 }
 
-/// Assembly plan for one model topology.
+/// The assembly plan of one model topology and the current pattern of its terms.
 pub struct Assembler {
     /// Global dofs of each element.
     pub elem_dofs: Vec<[usize; 8]>,
-    /// Position of each element-matrix entry in the CSR values (`u32::MAX` if constrained).
+    /// Position of each element-matrix entry in the element-only pattern (`u32::MAX` if
+    /// constrained) ...
+    scatter_base: Vec<[u32; 64]>,
+    /// ... and in the current pattern.
     scatter: Vec<[u32; 64]>,
     /// Equation map.
     pub eq: Vec<usize>,
     pub n_free: usize,
     /// Element colours: no two elements of one colour share a node.
     pub colors: Vec<Vec<usize>>,
+    /// The element-only pattern (row pointers and columns of the free rows).
+    base_rows: Vec<usize>,
+    base_cols: Vec<usize>,
+    /// The entries the current terms add to the element pattern, sorted, and the number of
+    /// multiplier rows.
+    extra: Vec<(usize, usize)>,
+    n_multipliers: usize,
 }
-
 /// Greedy colouring of the elements so that elements sharing a node get different colours.
 pub fn color_elements(elements: &[[usize; 4]], n_nodes: usize) -> Vec<Vec<usize>> {
     let mut node_colors: Vec<u64> = vec![0; n_nodes]; // bit c set: a colour-c element touches the node
@@ -119,22 +142,9 @@ unsafe impl<T> Send for SharedMut<T> {}
 unsafe impl<T> Sync for SharedMut<T> {}
 
 impl Assembler {
-    /// Build the equation numbering and the free–free sparsity pattern.
+    /// The assembly plan of `model` with the equation numbering `eq` (`n_free` free rows), and
+    /// the element-only pattern.
     pub fn new(model: &Model, eq: Vec<usize>, n_free: usize) -> (Self, CsrMatrix) {
-        Self::with_couplings(model, eq, n_free, &[])
-    }
-
-    /// As [`Assembler::new`], with extra node groups (e.g. contact pairs: slave node and the
-    /// two nodes of its master segment) whose dofs the pattern must couple.
-    pub fn with_couplings(model: &Model, eq: Vec<usize>, n_free: usize, extra: &[[usize; 3]]) -> (Self, CsrMatrix) {
-        Self::with_multipliers(model, eq, n_free, extra, &[])
-    }
-
-    /// As [`Assembler::with_couplings`], with Lagrange multipliers appended as equations
-    /// `n_free + k` after the free dofs: multiplier k couples with the global dofs
-    /// `multipliers[k]` (both ways) and has a diagonal entry. The matrix is
-    /// (n_free + m) × (n_free + m).
-    pub fn with_multipliers(model: &Model, eq: Vec<usize>, n_free: usize, extra: &[[usize; 3]], multipliers: &[Vec<usize>]) -> (Self, CsrMatrix) {
         let elem_dofs: Vec<[usize; 8]> = model
             .elements
             .iter()
@@ -147,7 +157,7 @@ impl Assembler {
                 d
             })
             .collect();
-        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n_free + multipliers.len()];
+        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n_free];
         for d in &elem_dofs {
             for &i in d {
                 if eq[i] == FIXED {
@@ -160,35 +170,12 @@ impl Assembler {
                 }
             }
         }
-        for g in extra {
-            let dofs: Vec<usize> = g.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect();
-            for &i in &dofs {
-                if eq[i] == FIXED {
-                    continue;
-                }
-                for &j in &dofs {
-                    if eq[j] != FIXED {
-                        rows[eq[i]].push(eq[j]);
-                    }
-                }
-            }
-        }
-        for (k, dofs) in multipliers.iter().enumerate() {
-            let m = n_free + k;
-            rows[m].push(m);
-            for &i in dofs {
-                if eq[i] != FIXED {
-                    rows[eq[i]].push(m);
-                    rows[m].push(eq[i]);
-                }
-            }
-        }
         for r in rows.iter_mut() {
             r.sort_unstable();
             r.dedup();
         }
         let kk = CsrMatrix::from_rows(rows.len(), &rows);
-        let scatter = elem_dofs
+        let scatter_base: Vec<[u32; 64]> = elem_dofs
             .iter()
             .map(|d| {
                 let mut s = [u32::MAX; 64];
@@ -203,7 +190,119 @@ impl Assembler {
             })
             .collect();
         let colors = color_elements(&model.elements, model.n_nodes());
-        (Self { elem_dofs, scatter, eq, n_free, colors }, kk)
+        let assembler = Self {
+            elem_dofs,
+            scatter: scatter_base.clone(),
+            scatter_base,
+            eq,
+            n_free,
+            colors,
+            base_rows: kk.row_ptr.clone(),
+            base_cols: kk.col_idx.clone(),
+            extra: Vec::new(),
+            n_multipliers: 0,
+        };
+        (assembler, kk)
+    }
+
+    /// The pattern of the elements plus the terms whose connectivity changes: every block of
+    /// `blocks` couples all its dofs (the contact pairs), and Lagrange multiplier k, the
+    /// equation `n_free + k`, couples with the dofs `multipliers[k]` both ways and has a
+    /// diagonal entry. When these couplings differ from the current ones, `kk` becomes the new
+    /// pattern (a new `pattern_id`, values zero, `n_free + multipliers.len()` rows): the
+    /// element couplings are merged with the new ones row by row and the element scatter is
+    /// remapped, in O(entries), without going back to the mesh. Returns whether the pattern
+    /// changed.
+    pub fn set_terms(&mut self, kk: &mut CsrMatrix, blocks: &[Vec<usize>], multipliers: &[Vec<usize>]) -> bool {
+        let eq = &self.eq;
+        let mut extra: Vec<(usize, usize)> = Vec::new();
+        for dofs in blocks {
+            for &i in dofs {
+                if eq[i] == FIXED {
+                    continue;
+                }
+                for &j in dofs {
+                    if eq[j] != FIXED {
+                        extra.push((eq[i], eq[j]));
+                    }
+                }
+            }
+        }
+        for (k, dofs) in multipliers.iter().enumerate() {
+            let m = self.n_free + k;
+            extra.push((m, m));
+            for &i in dofs {
+                if eq[i] != FIXED {
+                    extra.push((eq[i], m));
+                    extra.push((m, eq[i]));
+                }
+            }
+        }
+        extra.sort_unstable();
+        extra.dedup();
+        // (entries the elements couple already are dropped, so that the same pattern always
+        // has the same list)
+        extra.retain(|&(r, c)| r >= self.n_free || self.base_cols[self.base_rows[r]..self.base_rows[r + 1]].binary_search(&c).is_err());
+        if extra == self.extra && multipliers.len() == self.n_multipliers && kk.nrows == self.n_free + multipliers.len() {
+            return false;
+        }
+        let n_rows = self.n_free + multipliers.len();
+        let (mut row_ptr, mut col_idx) = (Vec::with_capacity(n_rows + 1), Vec::with_capacity(self.base_cols.len() + extra.len()));
+        let mut base_to_full = vec![0u32; self.base_cols.len()];
+        row_ptr.push(0);
+        let mut e = 0;
+        for r in 0..n_rows {
+            let (bs, be) = if r < self.n_free { (self.base_rows[r], self.base_rows[r + 1]) } else { (0, 0) };
+            let mut b = bs;
+            loop {
+                let next_extra = extra.get(e).filter(|x| x.0 == r).map(|x| x.1);
+                let next_base = (b < be).then(|| self.base_cols[b]);
+                match (next_base, next_extra) {
+                    (None, None) => break,
+                    (Some(c), x) if x.is_none_or(|x| c < x) => {
+                        base_to_full[b] = col_idx.len() as u32;
+                        col_idx.push(c);
+                        b += 1;
+                    }
+                    (_, Some(x)) => {
+                        col_idx.push(x);
+                        e += 1;
+                    }
+                    (Some(_), None) => unreachable!("covered by the second arm"),
+                }
+            }
+            row_ptr.push(col_idx.len());
+        }
+        *kk = CsrMatrix::from_parts(n_rows, row_ptr, col_idx);
+        for (s, base) in self.scatter.iter_mut().zip(&self.scatter_base) {
+            for (p, &q) in s.iter_mut().zip(base) {
+                *p = if q == u32::MAX { u32::MAX } else { base_to_full[q as usize] };
+            }
+        }
+        self.extra = extra;
+        self.n_multipliers = multipliers.len();
+        true
+    }
+
+    /// The positions in `kk` of blocks over the global dofs `blocks` (constrained dofs have
+    /// none).
+    pub fn block_map(&self, kk: &CsrMatrix, blocks: &[Vec<usize>]) -> BlockMap {
+        let rows: Vec<Vec<usize>> = blocks.iter().map(|b| b.iter().map(|&d| self.eq[d]).collect()).collect();
+        BlockMap::locate(kk, rows.iter().map(Vec::as_slice))
+    }
+
+    /// The positions in `kk` of the multiplier blocks: block k over the dofs `multipliers[k]`
+    /// and, last, the multiplier's own equation `n_free + k`.
+    pub fn multiplier_map(&self, kk: &CsrMatrix, multipliers: &[Vec<usize>]) -> BlockMap {
+        let rows: Vec<Vec<usize>> = multipliers.iter().enumerate().map(|(k, b)| b.iter().map(|&d| self.eq[d]).chain([self.n_free + k]).collect()).collect();
+        BlockMap::locate(kk, rows.iter().map(Vec::as_slice))
+    }
+
+    /// The position in `kk` of the diagonal entry of every dof (a 1 × 1 block per dof; none for
+    /// a constrained one).
+    pub fn diagonal_map(&self, kk: &CsrMatrix) -> BlockMap {
+        let rows: Vec<[usize; 1]> = self.eq.iter().map(|&q| [q]).collect();
+        BlockMap::locate(kk, rows.iter().map(|r| r.as_slice()))
     }
 
     /// Evaluate only the elements `e` with `keep[e]` from now on (a process of a distributed
@@ -217,35 +316,18 @@ impl Assembler {
     }
 
     /// Assemble the internal force `f_int` (all dofs, N/mm) and, if `kk` is given, the tangent
-    /// on the free dofs, for nodal displacements `u` (dof `2 n + c`), committed states `old` and the element
-    /// volumetric data `vol`. Gauss-point results go to `fields`. Every element's reference
-    /// configuration is the original one (initial volume ratio j₀ = 1, see
-    /// [`Assembler::assemble_j0`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn assemble(
-        &mut self,
-        model: &Model,
-        u: &[f64],
-        old: &[[MatState; 4]],
-        alpha0: &[[f64; N_ENH]],
-        vol: &[Volumetric],
-        inc: TimeIncrement,
-        kk: Option<&mut CsrMatrix>,
-        f_int: &mut [f64],
-        fields: &mut ElementFields,
-        pool: Option<&rayon::ThreadPool>,
-    ) -> Result<(), AssemblyError> {
-        self.assemble_j0(model, u, old, alpha0, vol, None, inc, kk, f_int, fields, pool)
-    }
-
-    /// As [`Assembler::assemble`], with the initial volume ratio j₀ of every element
-    /// (`j0[e]`, see the module docs of [`crate::element`]); `None` means j₀ = 1 everywhere.
+    /// on the free dofs, for nodal displacements `u` (dof `2 n + c`), committed states `old`,
+    /// enhanced modes `alpha0`, the element volumetric data `vol` and the initial volume ratio
+    /// j₀ of every element (`j0[e]`, see the module docs of [`crate::element`]; `None`: the
+    /// reference configuration of every element is the original one, j₀ = 1). Gauss-point
+    /// results go to `fields`.
     ///
     /// # Errors
-    /// As [`Assembler::assemble`]; an element without an entry in `j0`, or with a j₀ that is
-    /// not positive and finite, fails with [`MaterialError::InvalidVolumeRatio`].
+    /// The first element (in the assembly order) whose kernel fails; an element without an
+    /// entry in `j0`, or with a j₀ that is not positive and finite, fails with
+    /// [`MaterialError::InvalidVolumeRatio`].
     #[allow(clippy::too_many_arguments)]
-    pub fn assemble_j0(
+    pub fn assemble(
         &mut self,
         model: &Model,
         u: &[f64],

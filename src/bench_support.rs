@@ -48,8 +48,18 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         title: "benchmark block".into(),
         formulation: Formulation::UpdatedLagrangian,
         element: crate::element::ElementKind::Q1P0,
-        walls: vec![],
+        loading: crate::loading::Loading {
+            prescribed: bottom
+                .iter()
+                .flat_map(|&n| [2 * n, 2 * n + 1])
+                .map(|dof| crate::loading::PrescribedDof { dof, value: 0.0, amplitude: 0 })
+                .collect(),
+            amplitudes: vec![crate::loading::Amplitude::Constant],
+            t_end: 1.0,
+            ..Default::default()
+        },
         contact: Default::default(),
+        stabilisation: Default::default(),
         stop: Default::default(),
         remesh: Default::default(),
         materials: vec![material.clone()],
@@ -59,18 +69,10 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         elem_material: vec![0; ne],
         elem_body: vec![0; ne],
         bodies: vec![crate::model::Body { name: "block".into(), contact_h: crate::model::Body::mean_element_size(&mesh), mesh, material: 0, node_offset: 0, elem_offset: 0, mesh_size: 1.0 }],
-        prescribed: bottom
-            .iter()
-            .flat_map(|&n| [2 * n, 2 * n + 1])
-            .map(|dof| crate::model::PrescribedDof { dof, value: 0.0, amplitude: 0 })
-            .collect(),
-        loads: vec![],
-        amplitudes: vec![crate::case::Amplitude::Constant],
         reaction_groups: vec![],
         displacement_groups: vec![],
-        t_end: 1.0,
     };
-    let (eq, n_free) = number_equations(model.n_dofs(), model.prescribed.iter().map(|p| p.dof));
+    let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
     let (assembler, kk) = Assembler::new(&model, eq, n_free);
     let u = model.x0.iter().flat_map(|p| [0.01 * p[0], -0.01 * p[1]]).collect();
     let kappa = material.bulk_modulus().unwrap_or(1e3 * material.shear_modulus());
@@ -98,6 +100,7 @@ impl Fixture {
                 &self.old,
                 &vec![[0.0; crate::element::N_ENH]; self.old.len()],
                 &self.vol,
+                None,
                 TimeIncrement { time: 1.0, dt: 1.0 },
                 Some(&mut self.kk),
                 &mut self.f_int,
@@ -187,6 +190,7 @@ pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
             &vec![[MatState::default(); 4]; ne],
             &vec![[0.0; crate::element::N_ENH]; ne],
             &vec![Volumetric { kappa, lambda: 0.0 }; ne],
+            None,
             TimeIncrement { time: 1.0, dt: 1.0 },
             Some(&mut kk),
             &mut f_int,
@@ -254,4 +258,54 @@ pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
         a.values[p] += 1e-3 * mean_diag;
     }
     a
+}
+
+/// The contact pattern of an `n × n` disc grid at two configurations: the reference one
+/// (neighbours at solid ratio 0.78, almost touching) and the same shrunk by 1 % towards the
+/// die's centre (the discs overlap their neighbours a little: more and other pairs). Switching
+/// the assembler between the two pair sets is a change of contact pairs.
+pub struct PairChange {
+    pub model: Model,
+    pub assembler: Assembler,
+    pub kk: CsrMatrix,
+    /// The dofs of every frozen pair in each configuration.
+    pub pairs: [Vec<Vec<usize>>; 2],
+}
+
+/// [`PairChange`] of an `n × n` grid of discs meshed at `mesh_size` in a 100 n mm die.
+pub fn pair_change_fixture(n: usize, mesh_size: f64) -> PairChange {
+    let side = 100.0 * n as f64;
+    let text = disc_grid_case(n, side, 0.78, mesh_size, "[contact]\nsearch_distance = 5.0\n");
+    let case = crate::case::parse(&text, std::path::Path::new(".")).expect("benchmark case");
+    let model = Model::from_case(&case).expect("benchmark model");
+    let mut contact = model.contact_problem().expect("a contact problem");
+    let walls = model.wall_planes(0.0);
+    let c = 0.5 * side;
+    let shrunk: Vec<[f64; 2]> = model.x0.iter().map(|p| [c + 0.99 * (p[0] - c), c + 0.99 * (p[1] - c)]).collect();
+    contact.select_pairs(&model.x0, &walls);
+    let a = contact.pair_dof_lists();
+    contact.select_pairs(&shrunk, &walls);
+    let b = contact.pair_dof_lists();
+    let (eq, n_free) = number_equations(model.n_dofs(), std::iter::empty());
+    let (assembler, kk) = Assembler::new(&model, eq, n_free);
+    PairChange { model, assembler, kk, pairs: [a, b] }
+}
+
+impl PairChange {
+    /// Switch the pattern to pair set `k` (0 or 1) the incremental way (what a step whose
+    /// pairs changed does); returns the number of entries.
+    pub fn switch(&mut self, k: usize) -> usize {
+        self.assembler.set_terms(&mut self.kk, &self.pairs[k], &[]);
+        self.kk.nnz()
+    }
+
+    /// Rebuild the assembler and its pattern from the mesh for pair set `k` (what every change
+    /// of pairs cost before the pattern was updated incrementally); returns the entries.
+    pub fn rebuild(&mut self, k: usize) -> usize {
+        let (mut a, mut kk) = Assembler::new(&self.model, self.assembler.eq.clone(), self.assembler.n_free);
+        a.set_terms(&mut kk, &self.pairs[k], &[]);
+        self.assembler = a;
+        self.kk = kk;
+        self.kk.nnz()
+    }
 }

@@ -23,7 +23,7 @@
 //! The file is written as `checkpoint.h5.tmp`, flushed and synced to disk, then renamed over
 //! `checkpoint.h5`: a run killed while it writes leaves the previous checkpoint intact.
 
-use crate::case::{SolverSpec, TimeSpec};
+use crate::solver::{SolverSpec, TimeSpec};
 use crate::mesh::Mesh;
 use crate::model::Model;
 use crate::solver::{SimScalars, SimState, Simulation, Solution};

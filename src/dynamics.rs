@@ -34,8 +34,7 @@
 //!
 //! Kinetic energy: ½ vᵀ M v over all dofs.
 
-use crate::assembly::FIXED;
-use crate::linalg::CsrMatrix;
+use crate::linalg::{BlockMap, NO_ROW as FIXED};
 use crate::model::Model;
 
 /// Time integration of the equations of motion (`[time] integrator`).
@@ -234,29 +233,21 @@ impl Dynamics {
     }
 
     /// Add the inertia and HHT terms to the internal forces of every dof,
-    /// F_int += (M a_{n+1}(u) − α g_n) / (1 + α), and, when `kk` is given, their derivative
-    /// M / ((1 + α) β Δt²) to the diagonal of the free–free tangent (`eq` maps dofs to rows).
-    pub fn add_inertia(
-        &self,
-        u: &[f64],
-        dt: f64,
-        eq: &[usize],
-        f_int: &mut [f64],
-        kk: Option<&mut CsrMatrix>,
-    ) {
+    /// F_int += (M a_{n+1}(u) − α g_n) / (1 + α), and, with a tangent (matrix values and the
+    /// position of every dof's diagonal entry, none for a constrained dof), their derivative
+    /// M / ((1 + α) β Δt²) to the diagonal.
+    pub fn add_inertia(&self, u: &[f64], dt: f64, f_int: &mut [f64], tangent: Option<(&mut [f64], &BlockMap)>) {
         let p = self.params;
         let s = 1.0 / (1.0 + p.alpha);
         for d in 0..self.mass.len() {
             let acc = self.acceleration(d, u[d], dt);
             f_int[d] += s * (self.mass[d] * acc - p.alpha * self.g[d]);
         }
-        if let Some(kk) = kk {
+        if let Some((values, diag)) = tangent {
             let c = s / (p.beta * dt * dt);
-            for (d, &q) in eq.iter().enumerate() {
-                if q != FIXED && self.mass[d] > 0.0 {
-                    if let Some(pos) = kk.find(q, q) {
-                        kk.values[pos] += c * self.mass[d];
-                    }
+            for d in 0..self.mass.len() {
+                if self.mass[d] > 0.0 {
+                    diag.add(values, d, &[c * self.mass[d]]);
                 }
             }
         }
@@ -308,7 +299,8 @@ mod tests {
         let mut dy = Dynamics::new(params, vec![m]);
         let eq = [0usize];
         dy.start(&[u0], &[k * u0], &[f], &eq);
-        let mut kk = CsrMatrix::from_rows(1, &[vec![0]]);
+        let mut kk = crate::linalg::CsrMatrix::from_rows(1, &[vec![0]]);
+        let diag = BlockMap::locate(&kk, [&[0usize][..]]);
         let mut out = vec![(u0, 0.5 * k * u0 * u0 - f * u0)];
         for _ in 0..steps {
             let mut u = [0.0];
@@ -316,11 +308,11 @@ mod tests {
             for _ in 0..2 {
                 kk.values[0] = k;
                 let mut fi = [k * u[0]];
-                dy.add_inertia(&u, dt, &eq, &mut fi, Some(&mut kk));
+                dy.add_inertia(&u, dt, &mut fi, Some((&mut kk.values, &diag)));
                 u[0] += (f - fi[0]) / kk.values[0];
             }
             let mut fi = [k * u[0]];
-            dy.add_inertia(&u, dt, &eq, &mut fi, None);
+            dy.add_inertia(&u, dt, &mut fi, None);
             dy.commit(&u, dt, &fi, &[f]);
             out.push((u[0], dy.kinetic_energy() + 0.5 * k * u[0] * u[0] - f * u[0]));
         }

@@ -53,9 +53,18 @@
 //! j₀ = 1 gives the same results, bit for bit, as an element without the option
 //! ([`evaluate`], [`evaluate_enhanced`]).
 
-use crate::case::Formulation;
 use crate::material::{ConstitutiveLaw, MatResponse, MatState, MaterialError, TimeIncrement};
 use nalgebra::Matrix3;
+
+/// Which incremental formulation the element uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Formulation {
+    /// Total Lagrangian (reference configuration), paper eq. 5–11.
+    TotalLagrangian,
+    /// Updated Lagrangian (current configuration), paper eq. 12–17.
+    #[default]
+    UpdatedLagrangian,
+}
 
 /// Gauss points of the 2×2 rule (ξ, η); all weights are 1.
 const G: f64 = 0.577_350_269_189_625_8;

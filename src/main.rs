@@ -178,8 +178,8 @@ fn main() -> ExitCode {
                         c.bodies.len(),
                         m.n_nodes(),
                         m.elements.len(),
-                        m.prescribed.len(),
-                        m.loads.len(),
+                        m.loading.prescribed.len(),
+                        m.loading.loads.len(),
                         c.time.end
                     );
                     println!("mesh quality: min scaled Jacobian {min_sj:.3}, max aspect ratio {max_ar:.2}, {inverted} inverted element(s)");
@@ -824,7 +824,8 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     let restarts = earlier.restarts.clone();
     // the pressure–density curve for the compaction-law fits: the mean pressure of the moving
     // walls (of every loaded wall when none moves)
-    let pressing: Vec<usize> = sim.model.walls.iter().filter(|w| w.velocity != 0.0).map(|w| w.side.index()).collect();
+    let loading = &sim.model.loading;
+    let pressing: Vec<usize> = loading.walls.iter().enumerate().filter(|&(w, _)| loading.wall_moves(w)).map(|(_, wall)| wall.side.index()).collect();
     let mut curve: Vec<mpfem::fits::CurvePoint> = std::mem::take(&mut earlier.curve);
     // checkpoints: every `checkpoint_every` steps, every `checkpoint_minutes`, and after the
     // step in which a signal arrived
@@ -949,7 +950,7 @@ fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, out: &Path, thread
     let last_step = summary.and_then(|s| s.last.as_ref());
     let wall_time_s = wall_before + started.elapsed().as_secs_f64();
     let output_s = history_s + ckpt_s + results.as_ref().map_or(0.0, |w| w.elapsed_s);
-    let t = &sim.timing;
+    let t = &sim.timing();
     let file = SummaryFile {
         mpfem_version: env!("CARGO_PKG_VERSION"),
         title: &title,

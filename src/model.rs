@@ -1,10 +1,17 @@
-//! The discrete model built from a validated case: meshes of every body in one global node
-//! numbering, materials per element, prescribed displacements and loads as lists of degrees of
-//! freedom and boundary edges.
+//! The discrete model: meshes of every body in one global node numbering, materials per
+//! element, the prescribed motion and loads ([`Loading`]), and the parameters of each part
+//! of the physics (contact, stabilisation, re-meshing, the stop criteria). The case file
+//! builds it ([`crate::case`], `Model::from_case`); nothing here knows the case file.
 
-use crate::case::{Amplitude, BodySpec, Case, Formulation, LoadKind, ShapeSpec};
+use crate::contact::{ContactBody, ContactProblem};
+use crate::contact::{ContactKind, Wall};
+use crate::contact::{ContactMethod, ContactNormal, ContactParams};
+use crate::element::{ElementKind, Formulation};
+use crate::loading::{LoadKind, Loading};
 use crate::material::{ConstitutiveLaw, Material};
-use crate::mesh::{shapes, Mesh};
+use crate::mesh::Mesh;
+use crate::remesh::RemeshSpec;
+use crate::stabilise::StabilisationParams;
 use thiserror::Error;
 
 #[derive(Debug, Error)]
@@ -46,24 +53,6 @@ impl Body {
     }
 }
 
-/// A prescribed displacement component: `u[dof] = value · amplitude(t)`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PrescribedDof {
-    pub dof: usize,
-    pub value: f64,
-    pub amplitude: usize,
-}
-
-/// A distributed load on a list of boundary edges (global node indices, body on the left).
-#[derive(Clone, Debug, PartialEq)]
-pub struct EdgeLoad {
-    pub edges: Vec<[usize; 2]>,
-    pub kind: LoadKind,
-    pub amplitude: usize,
-    /// Reference length of the edge set (mm), used by `LoadKind::Force`.
-    pub length0: f64,
-}
-
 /// A named set of nodes whose reactions or mean displacements go to the history.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeGroup {
@@ -71,17 +60,33 @@ pub struct NodeGroup {
     pub nodes: Vec<usize>,
 }
 
+/// The `[stop]` table: end the run early.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct StopSpec {
+    /// Stop once the solid ratio reaches this value.
+    pub solid_ratio: Option<f64>,
+    /// End the run normally (status "jammed") when the walls cannot advance any more (a step
+    /// fails below dt_min), instead of failing.
+    pub jam: bool,
+    /// A failed step counts as a jam only at or above this solid ratio (default 0.9).
+    pub jam_solid_ratio: f64,
+}
+
 #[derive(Clone, Debug)]
 pub struct Model {
     pub title: String,
     pub formulation: Formulation,
     /// Element technology of every element.
-    pub element: crate::element::ElementKind,
-    /// Rigid walls, contact settings and early-stop criteria of a compaction.
-    pub walls: Vec<crate::case::WallSpec>,
-    pub contact: crate::case::ContactSpec,
-    pub stop: crate::case::StopSpec,
-    pub remesh: crate::case::RemeshSpec,
+    pub element: ElementKind,
+    /// Walls, prescribed displacements, loads and their amplitudes.
+    pub loading: Loading,
+    /// Contact between the bodies and with the walls.
+    pub contact: ContactParams,
+    /// The stabilisation springs of a contact problem.
+    pub stabilisation: StabilisationParams,
+    /// Early-stop criteria of a compaction.
+    pub stop: StopSpec,
+    pub remesh: RemeshSpec,
     pub materials: Vec<Material>,
     /// Mass density of each material (t/mm³), used by the implicit dynamics.
     pub densities: Vec<f64>,
@@ -92,161 +97,25 @@ pub struct Model {
     pub elements: Vec<[usize; 4]>,
     pub elem_material: Vec<usize>,
     pub elem_body: Vec<usize>,
-    pub prescribed: Vec<PrescribedDof>,
-    pub loads: Vec<EdgeLoad>,
-    pub amplitudes: Vec<Amplitude>,
     pub reaction_groups: Vec<NodeGroup>,
     pub displacement_groups: Vec<NodeGroup>,
-    /// End time of the run (s): amplitudes "ramp" go from 0 to 1 over [0, t_end].
-    pub t_end: f64,
 }
 
-/// Mesh one body's shape at its mesh size / divisions.
-pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
-    let h = b.mesh_size;
-    let div = |i: usize, len: f64| b.divisions.map_or_else(|| shapes::divisions_for(len, h), |d| d[i]);
-    Ok(match &b.shape {
-        ShapeSpec::Rectangle { origin, size } => {
-            shapes::rectangle(*origin, size[0], size[1], div(0, size[0]), div(1, size[1]))
-        }
-        ShapeSpec::Cook => shapes::cook_membrane(div(0, 48.0), div(1, 44.0)),
-        ShapeSpec::Disc { center, radius } => shapes::disc(*center, *radius, h),
-        ShapeSpec::Ellipse { center, semi_axes, angle_deg } => shapes::ellipse(*center, *semi_axes, *angle_deg, h),
-        ShapeSpec::Polygon { vertices } => shapes::convex_polygon(vertices, h).map_err(|e| e.to_string())?,
-        ShapeSpec::Outline { vertices } => crate::mesh::polygon::simple_polygon(vertices, h).map_err(|e| e.to_string())?,
-        ShapeSpec::Gmsh { mesh, .. } => (**mesh).clone(),
-        ShapeSpec::AnnulusSector { center, inner_radius, outer_radius, angles_deg } => {
-            let arc = 0.5 * (inner_radius + outer_radius) * (angles_deg[1] - angles_deg[0]).abs().to_radians();
-            shapes::annulus_sector(
-                *center,
-                *inner_radius,
-                *outer_radius,
-                angles_deg[0],
-                angles_deg[1],
-                div(0, outer_radius - inner_radius),
-                div(1, arc),
-            )
-        }
-    })
+/// Whether the global tangent is symmetric: every material's consistent tangent is, no load
+/// is a follower pressure, and, when bodies can touch (`contact`: the contact parameters and
+/// the number of bodies), the contact is frictionless everywhere, not enforced by Lagrange
+/// multipliers and uses the segment normal between particles (the smoothed normal's tangent
+/// is not symmetric, see [`crate::contact::smooth`]). The one place that decides it, and with
+/// it Cholesky against LU ([`crate::linalg::LinearChoice::resolve`]).
+pub fn symmetric_tangent<'a>(materials: impl IntoIterator<Item = &'a Material>, follower_loads: bool, contact: Option<(&ContactParams, usize)>) -> bool {
+    let frictionless = |k: &ContactKind| matches!(k, ContactKind::Sliding);
+    let contact_ok = contact.is_none_or(|(c, n_bodies)| {
+        frictionless(&c.kind) && c.walls.iter().all(frictionless) && c.method != ContactMethod::Lagrange && (n_bodies < 2 || c.normal != ContactNormal::Smoothed)
+    });
+    materials.into_iter().all(|m| m.symmetric_tangent()) && !follower_loads && contact_ok
 }
 
 impl Model {
-    pub fn from_case(case: &Case) -> Result<Self, ModelError> {
-        let mut bodies = Vec::with_capacity(case.bodies.len());
-        let mut x0 = Vec::new();
-        let mut elements = Vec::new();
-        let mut elem_material = Vec::new();
-        let mut elem_body = Vec::new();
-        for (ib, b) in case.bodies.iter().enumerate() {
-            let mesh = mesh_body(b).map_err(|message| ModelError::Mesh { body: ib, name: b.name.clone(), message })?;
-            let node_offset = x0.len();
-            let elem_offset = elements.len();
-            x0.extend_from_slice(&mesh.nodes);
-            for e in &mesh.elements {
-                elements.push(e.map(|n| n + node_offset));
-                elem_material.push(b.material);
-                elem_body.push(ib);
-            }
-            let contact_h = Body::mean_element_size(&mesh);
-            bodies.push(Body { name: b.name.clone(), mesh, material: b.material, node_offset, elem_offset, mesh_size: b.mesh_size, contact_h });
-        }
-
-        let mut amplitudes: Vec<Amplitude> = Vec::new();
-        let mut amp_index = |a: &Amplitude| -> usize {
-            amplitudes.push(a.clone());
-            amplitudes.len() - 1
-        };
-
-        let global_set = |key: &str, body: usize, set: &str| -> Result<(Vec<usize>, Vec<[usize; 2]>), ModelError> {
-            let b = &bodies[body];
-            let edges = b.mesh.edge_sets.get(set).ok_or_else(|| ModelError::MissingSet {
-                key: key.to_string(),
-                body: b.name.clone(),
-                set: set.to_string(),
-            })?;
-            let nodes = b.mesh.node_set(set).unwrap_or_default().into_iter().map(|n| n + b.node_offset).collect();
-            let edges = edges.iter().map(|e| e.map(|n| n + b.node_offset)).collect();
-            Ok((nodes, edges))
-        };
-
-        let mut prescribed: Vec<PrescribedDof> = Vec::new();
-        for (i, d) in case.boundary.iter().enumerate() {
-            let key = format!("boundary[{i}].set");
-            let (nodes, _) = global_set(&key, d.body, &d.set)?;
-            let amp = amp_index(&d.amplitude);
-            let center = case.bodies[d.body].shape.center().unwrap_or([0.0, 0.0]);
-            for &n in &nodes {
-                let mut set_dof = |dof: usize, value: f64| {
-                    if let Some(p) = prescribed.iter_mut().find(|p| p.dof == dof) {
-                        p.value = value;
-                        p.amplitude = amp;
-                    } else {
-                        prescribed.push(PrescribedDof { dof, value, amplitude: amp });
-                    }
-                };
-                if let Some(r) = d.radial {
-                    let dx = x0[n][0] - center[0];
-                    let dy = x0[n][1] - center[1];
-                    let len = (dx * dx + dy * dy).sqrt().max(f64::MIN_POSITIVE);
-                    set_dof(2 * n, r * dx / len);
-                    set_dof(2 * n + 1, r * dy / len);
-                }
-                if let Some(ux) = d.ux {
-                    set_dof(2 * n, ux);
-                }
-                if let Some(uy) = d.uy {
-                    set_dof(2 * n + 1, uy);
-                }
-            }
-        }
-        prescribed.sort_by_key(|p| p.dof);
-
-        let mut loads = Vec::new();
-        for (i, l) in case.loads.iter().enumerate() {
-            let key = format!("loads[{i}].set");
-            let (_, edges) = global_set(&key, l.body, &l.set)?;
-            let length0 = edges
-                .iter()
-                .map(|e| {
-                    let (a, b) = (x0[e[0]], x0[e[1]]);
-                    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
-                })
-                .sum();
-            loads.push(EdgeLoad { edges, kind: l.kind.clone(), amplitude: amp_index(&l.amplitude), length0 });
-        }
-
-        let group = |(body, set): &(usize, String), prefix: &str| -> Result<NodeGroup, ModelError> {
-            let (nodes, _) = global_set(&format!("output.{prefix}"), *body, set)?;
-            Ok(NodeGroup { label: format!("{}_{}", bodies[*body].name, set), nodes })
-        };
-        let reaction_groups = case.output.reactions.iter().map(|g| group(g, "reactions")).collect::<Result<_, _>>()?;
-        let displacement_groups =
-            case.output.displacements.iter().map(|g| group(g, "displacements")).collect::<Result<_, _>>()?;
-
-        Ok(Self {
-            title: case.title.clone(),
-            formulation: case.formulation,
-            element: case.element,
-            walls: case.walls.clone(),
-            contact: case.contact.clone(),
-            stop: case.stop.clone(),
-            remesh: case.remesh.clone(),
-            materials: case.materials.iter().map(|m| m.material.clone()).collect(),
-            densities: case.materials.iter().map(|m| m.density).collect(),
-            bodies,
-            x0,
-            elements,
-            elem_material,
-            elem_body,
-            prescribed,
-            loads,
-            amplitudes,
-            reaction_groups,
-            displacement_groups,
-            t_end: case.time.end,
-        })
-    }
-
     pub fn n_nodes(&self) -> usize {
         self.x0.len()
     }
@@ -255,24 +124,40 @@ impl Model {
         2 * self.x0.len()
     }
 
-    /// Amplitude factor of amplitude `i` at time `t`.
-    pub fn amplitude(&self, i: usize, t: f64) -> f64 {
-        self.amplitudes[i].at(t, self.t_end)
+    /// Whether bodies can touch: there are walls or several bodies.
+    pub fn has_contact(&self) -> bool {
+        !self.loading.walls.is_empty() || self.bodies.len() > 1
     }
 
-    /// True when every material has a symmetric tangent, no load is a follower pressure and
-    /// all contact is frictionless with the segment normal (the smoothed one has a
-    /// non-symmetric tangent, see [`crate::contact::smooth`]), so the global tangent is
-    /// symmetric.
+    /// What the contact needs of each body: mesh, node offset, contact length, Young's modulus.
+    pub fn contact_bodies(&self) -> Vec<ContactBody<'_>> {
+        self.bodies
+            .iter()
+            .map(|b| ContactBody { mesh: &b.mesh, node_offset: b.node_offset, h: b.contact_h, e: self.materials[b.material].youngs_modulus() })
+            .collect()
+    }
+
+    /// The contact problem of this model (`None` when nothing can touch).
+    pub fn contact_problem(&self) -> Option<ContactProblem> {
+        ContactProblem::new(&self.contact_bodies(), &self.x0, self.contact.clone())
+    }
+
+    /// The rigid walls at time `t` as the planes the contact kernels take.
+    pub fn wall_planes(&self, t: f64) -> Vec<Wall> {
+        (0..self.loading.walls.len())
+            .map(|w| {
+                let (point, normal) = self.loading.wall_plane(w, t);
+                Wall { point, normal }
+            })
+            .collect()
+    }
+
+    /// Whether the global tangent of this model is symmetric (see [`symmetric_tangent`]; the
+    /// materials of the bodies count).
     pub fn symmetric_tangent(&self) -> bool {
-        use crate::contact::kernels::ContactKind;
-        let frictionless = |k: &ContactKind| matches!(k, ContactKind::Sliding);
-        let contact = !self.walls.is_empty() || self.bodies.len() > 1;
-        self.materials.iter().all(|m| m.symmetric_tangent())
-            && self.loads.iter().all(|l| !matches!(l.kind, LoadKind::Pressure(_)))
-            && (!contact || (frictionless(&self.contact.kind) && self.walls.iter().all(|w| frictionless(&w.kind))))
-            && (!contact || self.contact.method != crate::case::ContactMethod::Lagrange)
-            && (self.bodies.len() < 2 || self.contact.normal != crate::case::ContactNormal::Smoothed)
+        let follower = self.loading.loads.iter().any(|l| matches!(l.kind, LoadKind::Pressure(_)));
+        let contact = self.has_contact().then_some((&self.contact, self.bodies.len()));
+        symmetric_tangent(self.bodies.iter().filter_map(|b| self.materials.get(b.material)), follower, contact)
     }
 
     /// Why body `b` cannot be re-meshed (its nodes are named by prescribed displacements,
@@ -282,10 +167,10 @@ impl Model {
         let body = self.bodies.get(b)?;
         let (lo, hi) = (body.node_offset, body.node_offset + body.mesh.n_nodes());
         let inside = |n: usize| (lo..hi).contains(&n);
-        if self.prescribed.iter().any(|p| inside(p.dof / 2)) {
+        if self.loading.prescribed.iter().any(|p| inside(p.dof / 2)) {
             return Some("prescribed displacements");
         }
-        if self.loads.iter().any(|l| l.edges.iter().flatten().any(|&n| inside(n))) {
+        if self.loading.loads.iter().any(|l| l.edges.iter().flatten().any(|&n| inside(n))) {
             return Some("loads");
         }
         if self.reaction_groups.iter().chain(&self.displacement_groups).any(|g| g.nodes.iter().any(|&n| inside(n))) {
@@ -333,10 +218,10 @@ impl Model {
             body.node_offset = node_offset;
             body.elem_offset = elem_offset;
         }
-        for p in &mut new.prescribed {
+        for p in &mut new.loading.prescribed {
             p.dof = 2 * renumber[p.dof / 2] + p.dof % 2;
         }
-        for l in &mut new.loads {
+        for l in &mut new.loading.loads {
             for e in &mut l.edges {
                 *e = e.map(|n| renumber[n]);
             }

@@ -37,7 +37,7 @@ pub const COMPACTION_COLUMNS: [&str; 13] = [
 
 /// Whether a model writes the compaction columns.
 pub fn has_compaction(model: &Model) -> bool {
-    !model.walls.is_empty() || model.bodies.len() > 1
+    model.has_contact()
 }
 
 /// Column names of `history.csv` for a model.

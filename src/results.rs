@@ -39,8 +39,7 @@
 //! through a temporary file and a rename, so it is always complete and names only steps that
 //! are in `results.h5`.
 
-use crate::case::WallSide;
-use crate::contact::driver::wall_position;
+use crate::loading::WallSide;
 use crate::solver::{Simulation, StepReport};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -313,7 +312,7 @@ impl ResultsWriter {
             .collect();
         let contact = sim.nodal_contact().filter(|c| c.pressure.len() == n_nodes).map(|c| {
             let mut wall_force = vec![0.0; 4 * n_nodes];
-            for (w, f) in model.walls.iter().zip(&c.wall_force) {
+            for (w, f) in model.loading.walls.iter().zip(&c.wall_force) {
                 let side = w.side.index();
                 for (n, v) in f.iter().enumerate() {
                     wall_force[4 * n + side] += v;
@@ -361,13 +360,9 @@ impl ResultsWriter {
 
         // Walls as line segments.
         let t = sim.sol.time;
-        let walls = &model.walls;
-        let pos = |side: WallSide| {
-            walls
-                .iter()
-                .find(|w| w.side == side)
-                .map(|w| wall_position(w, t))
-        };
+        let loading = &model.loading;
+        let walls = &loading.walls;
+        let pos = |side: WallSide| loading.wall_on(side).map(|w| loading.wall_position(w, t));
         let extent = |c: usize| {
             x.iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
@@ -376,8 +371,8 @@ impl ResultsWriter {
         };
         let mut wall_points = Vec::with_capacity(4 * walls.len());
         let mut wall_ids = Vec::with_capacity(walls.len());
-        for w in walls {
-            let p = wall_position(w, t);
+        for (iw, w) in walls.iter().enumerate() {
+            let p = loading.wall_position(iw, t);
             match w.side {
                 WallSide::Left | WallSide::Right => {
                     let (lo, hi) = match (pos(WallSide::Bottom), pos(WallSide::Top)) {

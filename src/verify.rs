@@ -121,7 +121,7 @@ pub fn patch_test_with(formulation: Formulation, element: crate::element::Elemen
         }
     }
     let ff = [[1.2, 0.15], [-0.05, 0.9]];
-    for p in model.prescribed.iter_mut() {
+    for p in model.loading.prescribed.iter_mut() {
         let (n, c) = (p.dof / 2, p.dof % 2);
         let x = model.x0[n];
         p.value = (ff[c][0] - if c == 0 { 1.0 } else { 0.0 }) * x[0] + (ff[c][1] - if c == 1 { 1.0 } else { 0.0 }) * x[1];
@@ -161,7 +161,7 @@ pub fn rigid_rotation(formulation: Formulation) -> Vec<Row> {
         Ok(m) => m,
         Err(e) => return vec![Row::failed(&name, "stress", &e.to_string())],
     };
-    for a in model.amplitudes.iter() {
+    for a in model.loading.amplitudes.iter() {
         debug_assert!(matches!(a, case::Amplitude::Ramp));
     }
     let e_mod = 64100.0;
@@ -177,12 +177,12 @@ pub fn rigid_rotation(formulation: Formulation) -> Vec<Row> {
         let t_next = c.time.end * i as f64 / steps as f64;
         // prescribed value × ramp amplitude(t_next) must equal (R − I) X
         let amp = t_next / c.time.end;
-        for k in 0..sim.model.prescribed.len() {
-            let p = &sim.model.prescribed[k];
+        for k in 0..sim.model.loading.prescribed.len() {
+            let p = &sim.model.loading.prescribed[k];
             let (n, comp) = (p.dof / 2, p.dof % 2);
             let x = sim.model.x0[n];
             let u = if comp == 0 { (co - 1.0) * x[0] - s * x[1] } else { s * x[0] + (co - 1.0) * x[1] };
-            sim.model.prescribed[k].value = u / amp;
+            sim.model.loading.prescribed[k].value = u / amp;
         }
         if let Err(e) = sim.advance(t_next - sim.sol.time) {
             return vec![Row::failed(&name, "stress", &e.to_string())];

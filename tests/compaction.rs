@@ -44,7 +44,7 @@ fn single_disc_between_two_walls() {
 /// Penalty and augmented Lagrangian give the same wall pressure on the 2 × 2 job, within 2 %
 /// at solid ratio 0.94 (the contact issue's criterion for its enforcement methods), and the
 /// augmented Lagrangian penetrates less. Lagrange multipliers are not compared here: on this
-/// job they stop near solid ratio 0.75 (see `contact::driver::Multipliers`); they are verified
+/// job they stop near solid ratio 0.75 (see `contact::problem::Multipliers`); they are verified
 /// against Hertz on rigid walls (`tests/hertz.rs`).
 #[test]
 fn penalty_and_augmented_lagrangian_agree_on_the_2x2_job() {

@@ -1,4 +1,6 @@
-//! Tests of the contact pair kernels (`mpfem::contact::kernels`).
+//! Tests of the contact pair kernels: the geometry records of a straight master segment and a
+//! rigid wall (`mpfem::contact::geometry`) under the penalty, augmented-Lagrangian and friction
+//! laws (`mpfem::contact::enforce`).
 //!
 //! Tolerances and why:
 //! * Tangent checks: central finite differences of f with a perturbation of 1e-7 mm; the
@@ -13,7 +15,11 @@
 //! * Uzawa: the penetration must decrease strictly at every update, with the analytical rate
 //!   k/(k + ε_N A) to 1e-9, and the pressure must reach the exact constrained value to 1e-9.
 
-use mpfem::contact::kernels::*;
+use mpfem::contact::enforce::*;
+use mpfem::contact::geometry::{nts_project, Wall};
+
+type PairOut = PairResult<6>;
+type WallOut = PairResult<2>;
 
 const H_FD: f64 = 1e-7;
 const FD_TOL: f64 = 1e-6;
@@ -35,9 +41,7 @@ fn setup(xi: f64, g: f64) -> ([f64; 2], [f64; 2], [f64; 2]) {
 }
 
 fn eval_nts(x: &[f64; 6], area: f64, kind: ContactKind, p: &PenaltyParams, old: &PairHistory) -> PairOut {
-    let mut out = PairOut::default();
-    nts_pair([x[0], x[1]], [x[2], x[3]], [x[4], x[5]], area, kind, p, old, &mut out);
-    out
+    segment_pair([x[0], x[1]], [x[2], x[3]], [x[4], x[5]], area, kind, p, old)
 }
 
 fn max_abs<const N: usize>(k: &[[f64; N]; N]) -> f64 {
@@ -74,9 +78,7 @@ fn eval_wall(
     p: &PenaltyParams,
     old: &PairHistory,
 ) -> WallOut {
-    let mut out = WallOut::default();
-    node_wall(x, wall, d, area, kind, p, old, &mut out);
-    out
+    wall_pair(x, wall, d, area, kind, p, old)
 }
 
 fn fd_check_wall(
@@ -145,17 +147,7 @@ fn projection_on_rotated_segment_matches_hand_values() {
     // Degenerate segment: inactive, no NaN in the output.
     let g = nts_project([0.5, -0.1], [1.0, 1.0], [1.0, 1.0]);
     assert!(g.gap.is_infinite() && g.gap > 0.0);
-    let mut out = PairOut::default();
-    nts_pair(
-        [0.5, -0.1],
-        [1.0, 1.0],
-        [1.0, 1.0],
-        1.0,
-        ContactKind::Cohering,
-        &params(),
-        &PairHistory::default(),
-        &mut out,
-    );
+    let out = segment_pair([0.5, -0.1], [1.0, 1.0], [1.0, 1.0], 1.0, ContactKind::Cohering, &params(), &PairHistory::default());
     assert!(!out.active && out.f == [0.0; 6]);
 }
 
@@ -362,7 +354,7 @@ fn coulomb_drag_on_wall_stick_then_slip() {
         total += 0.002;
         let o = eval_wall(x, &wall, 0.0, area, ContactKind::Rubbing { mu }, &p, &hist);
         assert!((o.pressure - pn).abs() < EXACT * pn);
-        let gt = o.s - hist.xi_stick;
+        let gt = o.xi - hist.xi_stick;
         if !slipped && total <= 0.01 - 1e-9 {
             assert!(!o.slip, "stick expected at g_T = {total}");
             assert!((o.shear - p.eps_t * gt).abs() < EXACT * pn);
@@ -426,7 +418,7 @@ fn uzawa_on_wall_converges_monotonically() {
     let mut hist = PairHistory::default();
     let mut y = 0.0;
     let mut pens = Vec::new();
-    let mut last = WallOut::default();
+    let mut last: Option<WallOut> = None;
     for _ in 0..14 {
         // Newton on R(y) = −k (y + δ) − f_c,y(y).
         let mut converged = false;
@@ -434,15 +426,16 @@ fn uzawa_on_wall_converges_monotonically() {
             let o = eval_wall([0.0, y], &wall, 0.0, area, ContactKind::Sliding, &p, &hist);
             let r = -kspr * (y + delta) - o.f[1];
             if r.abs() < 1e-13 * kspr * delta {
-                last = o;
+                last = Some(o);
                 converged = true;
                 break;
             }
             y += r / (kspr + o.k[1][1]);
         }
-        assert!(converged && last.active);
-        pens.push(-last.gap);
-        hist = augment_wall(&hist, &last);
+        let l = last.expect("converged");
+        assert!(converged && l.active);
+        pens.push(-l.gap);
+        hist = augment(&l);
     }
     // Pure penalty (first solve): penetration k δ/(k + ε A).
     assert!((pens[0] - kspr * delta / (kspr + p.eps_n * area)).abs() < 1e-12);
@@ -451,6 +444,7 @@ fn uzawa_on_wall_converges_monotonically() {
         // The rate is checked while the penetration is well above round-off (~1e-17 mm here).
         assert!((w[1] / w[0] - rate).abs() < 1e-6 || w[1] < 1e-10, "rate {} vs {rate}", w[1] / w[0]);
     }
+    let last = last.expect("converged");
     assert!((last.pressure - target).abs() < 1e-9 * target, "pressure {} vs {target}", last.pressure);
 }
 
@@ -466,14 +460,14 @@ fn uzawa_on_segment_converges_monotonically() {
     let mut xs = setup(0.4, 0.0).0;
     let mut hist = PairHistory::default();
     let mut pens = Vec::new();
-    let mut last = PairOut::default();
+    let mut last: Option<PairOut> = None;
     for _ in 0..13 {
         let mut converged = false;
         for _ in 0..20 {
             let o = eval_nts(&pack(xs, x1, x2), area, ContactKind::Sliding, &p, &hist);
             let r = [-kspr * (xs[0] - support[0]) - o.f[0], -kspr * (xs[1] - support[1]) - o.f[1]];
             if r[0].hypot(r[1]) < 1e-13 * kspr * delta {
-                last = o;
+                last = Some(o);
                 converged = true;
                 break;
             }
@@ -482,10 +476,12 @@ fn uzawa_on_segment_converges_monotonically() {
             xs[0] += (a[1][1] * r[0] - a[0][1] * r[1]) / det;
             xs[1] += (-a[1][0] * r[0] + a[0][0] * r[1]) / det;
         }
-        assert!(converged && last.active);
-        pens.push(-last.gap);
-        hist = augment(&hist, &last);
+        let l = last.expect("converged");
+        assert!(converged && l.active);
+        pens.push(-l.gap);
+        hist = augment(&l);
     }
+    let last = last.expect("converged");
     for w in pens.windows(2) {
         assert!(w[1] < w[0], "penetration must decrease: {pens:?}");
     }
@@ -505,18 +501,18 @@ fn augment_keeps_anchor_in_stick_and_moves_it_in_slip() {
     // Stick: λ_T ← t_T, anchor kept.
     let old = PairHistory { xi_stick: 0.3 - 0.001 / 2.0, lambda_n: 0.0, lambda_t: 0.0, active: true };
     let o = eval_nts(&x, 0.4, kind, &p, &old);
-    let h = augment(&old, &o);
+    let h = augment(&o);
     assert!(!o.slip && h.xi_stick == old.xi_stick && h.lambda_t == o.shear && h.lambda_n == o.pressure);
     // Slip: anchor to the current ξ, λ_T = t_T, so the same configuration gives the same shear.
     let old = PairHistory { xi_stick: 0.3 - 0.02 / 2.0, lambda_n: 0.0, lambda_t: 0.0, active: true };
     let o = eval_nts(&x, 0.4, kind, &p, &old);
-    let h = augment(&old, &o);
+    let h = augment(&o);
     assert!(o.slip && (h.xi_stick - o.xi).abs() < EXACT);
     let again = eval_nts(&x, 0.4, kind, &p, &h);
     assert!((again.shear - o.shear).abs() < 1e-9);
     // Inactive resets.
     let (xs, x1, x2) = setup(0.3, 0.05);
     let o = eval_nts(&pack(xs, x1, x2), 0.4, kind, &p, &h);
-    let h2 = augment(&h, &o);
+    let h2 = augment(&o);
     assert!(!h2.active && h2.lambda_n == 0.0 && h2.lambda_t == 0.0);
 }

@@ -16,17 +16,17 @@
 //!   the switch: its largest change is |n_A − n_B| p A = 2 sin(22.5°) p A (p the pressure at
 //!   the switch) to 2 %, the same at both resolutions.
 
-use mpfem::contact::kernels::*;
+use mpfem::contact::enforce::*;
 use mpfem::contact::smooth::*;
+
+type SmoothPairOut = PairResult<NDOF>;
 
 const H_FD: f64 = 1e-7;
 const FD_TOL: f64 = 1e-6;
 
 fn eval(x: &[f64; 10], has: [bool; 2], area: f64, kind: ContactKind, p: &PenaltyParams, old: &PairHistory) -> SmoothPairOut {
     let m = Master { x1: [x[2], x[3]], x2: [x[4], x[5]], prev: has[0].then_some([x[6], x[7]]), next: has[1].then_some([x[8], x[9]]) };
-    let mut out = SmoothPairOut::default();
-    nts_smooth_pair([x[0], x[1]], &m, area, kind, p, old, &mut out);
-    out
+    smooth_pair([x[0], x[1]], &m, area, kind, p, old)
 }
 
 fn fd_check(x: [f64; 10], has: [bool; 2], kind: ContactKind, p: &PenaltyParams, old: &PairHistory) -> (f64, SmoothPairOut) {
@@ -141,10 +141,8 @@ fn smoothed_equals_segment_on_a_straight_master() {
             (ContactKind::Sliding, PairHistory::default()),
             (ContactKind::Rubbing { mu: 0.3 }, PairHistory { xi_stick: xi - 0.001, lambda_n: 0.0, lambda_t: 0.0, active: true }),
         ] {
-            let mut seg = PairOut::default();
-            nts_pair(xs, m.x1, m.x2, 0.5, kind, &p, &old, &mut seg);
-            let mut sm = SmoothPairOut::default();
-            nts_smooth_pair(xs, &m, 0.5, kind, &p, &old, &mut sm);
+            let seg = segment_pair(xs, m.x1, m.x2, 0.5, kind, &p, &old);
+            let sm = smooth_pair(xs, &m, 0.5, kind, &p, &old);
             let fmax = seg.f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             assert!((sm.gap - seg.gap).abs() <= 1e-12 * l && (sm.xi - seg.xi).abs() <= 1e-12, "gap/xi: {} {} vs {} {}", sm.gap, sm.xi, seg.gap, seg.xi);
             for i in 0..6 {
@@ -183,12 +181,10 @@ fn corner_sweep(smoothed: bool, n: usize) -> Vec<([f64; 2], f64, f64)> {
                 let (x1, x2) = (pts[i1], pts[i2]);
                 let (xi, gap, f, pr) = if smoothed {
                     let m = Master { x1, x2, prev: Some(pts[i1 - 1]), next: Some(pts[i2 + 1]) };
-                    let mut out = SmoothPairOut::default();
-                    nts_smooth_pair(xs, &m, area, ContactKind::Sliding, &p, &PairHistory::default(), &mut out);
+                    let out = smooth_pair(xs, &m, area, ContactKind::Sliding, &p, &PairHistory::default());
                     (out.xi, out.gap, [-out.f[0], -out.f[1]], out.pressure)
                 } else {
-                    let mut out = PairOut::default();
-                    nts_pair(xs, x1, x2, area, ContactKind::Sliding, &p, &PairHistory::default(), &mut out);
+                    let out = segment_pair(xs, x1, x2, area, ContactKind::Sliding, &p, &PairHistory::default());
                     (out.xi, out.gap, [-out.f[0], -out.f[1]], out.pressure)
                 };
                 if !(0.0..=1.0).contains(&xi) {

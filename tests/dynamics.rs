@@ -84,7 +84,7 @@ struct StrainEnergy {
 
 impl StrainEnergy {
     fn new(model: &Model) -> Self {
-        let (eq, n_free) = number_equations(model.n_dofs(), model.prescribed.iter().map(|p| p.dof));
+        let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
         let (assembler, _) = Assembler::new(model, eq, n_free);
         let ne = model.elements.len();
         let vol = (0..ne)
@@ -126,6 +126,7 @@ impl StrainEnergy {
                     &old.states,
                     &alpha0,
                     &self.vol,
+                    None,
                     inc,
                     None,
                     &mut self.f,
@@ -143,7 +144,7 @@ impl StrainEnergy {
 /// half of t·ℓ to each node of an edge. The work of this dead load is F_ext · u.
 fn traction_forces(model: &Model, t: [f64; 2]) -> Vec<f64> {
     let mut f = vec![0.0; model.n_dofs()];
-    for load in &model.loads {
+    for load in &model.loading.loads {
         for e in &load.edges {
             let (a, b) = (model.x0[e[0]], model.x0[e[1]]);
             let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();

@@ -14,7 +14,7 @@
 //!
 //! Measurement. The nodal contact forces are those of the converged solution: the contact problem
 //! is evaluated once more at the converged displacement with the committed multipliers
-//! ([`ContactProblem::add`](mpfem::contact::driver::ContactProblem::add) into a zeroed vector,
+//! ([`ContactProblem::add`](mpfem::contact::ContactProblem::add) into a zeroed vector,
 //! which reproduces the forces of the last Newton evaluation; checked against the wall force the
 //! run reported). Nodal pressure = nodal wall force / tributary length of the node. The
 //! half-width and the peak pressure are a least-squares fit of the Hertz profile
@@ -49,7 +49,8 @@
 
 use mpfem::analytical::hertz::HertzCylinder;
 use mpfem::case::{self, Amplitude};
-use mpfem::model::{Model, PrescribedDof};
+use mpfem::loading::PrescribedDof;
+use mpfem::model::Model;
 use mpfem::solver::Simulation;
 use std::time::Instant;
 
@@ -171,12 +172,12 @@ fn check_hertz(text: String) {
     let c = case::parse(&text, std::path::Path::new("jobs/verification")).unwrap();
     let mut model = Model::from_case(&c).unwrap();
     assert_eq!(
-        model.contact.stabilisation, 0.0,
+        model.stabilisation.factor, 0.0,
         "the walls must carry the whole load"
     );
     // symmetry: ux = 0 on the vertical axis (removes horizontal translation and rotation)
-    model.amplitudes.push(Amplitude::Constant);
-    let amp = model.amplitudes.len() - 1;
+    model.loading.amplitudes.push(Amplitude::Constant);
+    let amp = model.loading.amplitudes.len() - 1;
     let axis: Vec<usize> = (0..model.n_nodes())
         .filter(|&n| model.x0[n][0].abs() < 1e-9 * R)
         .collect();
@@ -186,13 +187,13 @@ fn check_hertz(text: String) {
         axis.len()
     );
     for &n in &axis {
-        model.prescribed.push(PrescribedDof {
+        model.loading.prescribed.push(PrescribedDof {
             dof: 2 * n,
             value: 0.0,
             amplitude: amp,
         });
     }
-    model.prescribed.sort_by_key(|p| p.dof);
+    model.loading.prescribed.sort_by_key(|p| p.dof);
     let n_elements = model.elements.len();
 
     let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
@@ -206,17 +207,19 @@ fn check_hertz(text: String) {
     let t = sim.sol.time;
     let x = sim.coords(&sim.sol.u);
     let mut f = vec![0.0; sim.model.n_dofs()];
+    let walls = sim.model.wall_planes(t);
     let contact = sim.contact.as_mut().unwrap();
-    let stats = contact.add(&x, t, &mut f, None, false, &mpfem::contact::driver::EveryPair);
+    let stats = contact.add(&x, &walls, &mut f, None, &mut Default::default());
+    let b = &contact.boundary;
     let mut current_length = vec![0.0; x.len()];
-    for s in &contact.segments {
+    for s in &b.segments {
         let [a, b] = s.nodes;
         let l = ((x[b][0] - x[a][0]).powi(2) + (x[b][1] - x[a][1]).powi(2)).sqrt();
         current_length[a] += 0.5 * l;
         current_length[b] += 0.5 * l;
     }
     // bottom wall (first wall of the case): the force on the node is +y, f_c = −p A n
-    let mut loaded: Vec<(usize, usize)> = contact
+    let mut loaded: Vec<(usize, usize)> = b
         .slaves
         .iter()
         .enumerate()
@@ -227,14 +230,14 @@ fn check_hertz(text: String) {
     let reference = Profile {
         x: loaded.iter().map(|&(_, n)| sim.model.x0[n][0]).collect(),
         force: loaded.iter().map(|&(_, n)| -f[2 * n + 1]).collect(),
-        length: loaded.iter().map(|&(i, _)| contact.area[i]).collect(),
+        length: loaded.iter().map(|&(i, _)| b.area[i]).collect(),
     };
     let current = Profile {
         x: loaded.iter().map(|&(_, n)| x[n][0]).collect(),
         force: reference.force.clone(),
         length: loaded.iter().map(|&(_, n)| current_length[n]).collect(),
     };
-    let top_total: f64 = contact
+    let top_total: f64 = b
         .slaves
         .iter()
         .filter(|&&(n, _)| x[n][1] > 0.0)

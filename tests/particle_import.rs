@@ -159,7 +159,7 @@ fn parse(extra: &str) -> Result<case::Case, case::CaseError> {
 }
 
 fn mesh_area(b: &case::BodySpec) -> f64 {
-    let m = mpfem::model::mesh_body(b).unwrap();
+    let m = mpfem::case::mesh_body(b).unwrap();
     m.area(&m.nodes)
 }
 
@@ -200,7 +200,7 @@ fn gmsh_import_gives_one_body_per_physical_group() {
     // four triangles, each split into three quadrilaterals
     let expect = [(3.0, 3), (4.0, 12)];
     for (b, (area, n)) in c.bodies.iter().zip(expect) {
-        let m = mpfem::model::mesh_body(b).unwrap();
+        let m = mpfem::case::mesh_body(b).unwrap();
         assert_eq!(m.n_elements(), n, "{}", b.name);
         assert!((m.area(&m.nodes) - area).abs() < 1e-12 * area, "{}", b.name);
         assert!((0..m.n_elements()).all(|e| m.element_area(e, &m.nodes) > 0.0), "{}: CCW", b.name);

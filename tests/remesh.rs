@@ -532,20 +532,20 @@ fn held_boundary_nodes_keep_their_places_and_their_spacing() {
 /// master segment's nodes (node-to-wall: the wall's number instead of the segment), so that
 /// two numberings of the same assembly can be compared.
 type HistoryKey = ([u64; 2], [u64; 4], usize);
-fn active_histories(sim: &mpfem::solver::Simulation) -> std::collections::HashMap<HistoryKey, mpfem::contact::kernels::PairHistory> {
+fn active_histories(sim: &mpfem::solver::Simulation) -> std::collections::HashMap<HistoryKey, mpfem::contact::PairHistory> {
     let c = sim.contact.as_ref().expect("a contact problem");
     let x = sim.coords(&sim.sol.u);
     let bits = |p: [f64; 2]| p.map(f64::to_bits);
     let st = c.state();
     let mut out = std::collections::HashMap::new();
     for ((slave, seg), h) in st.nts.iter().filter(|(_, h)| h.active) {
-        let [a, b] = c.segments[*seg].nodes;
+        let [a, b] = c.boundary.segments[*seg].nodes;
         let (pa, pb) = (bits(x[a]), bits(x[b]));
         out.insert((bits(x[*slave]), [pa[0], pa[1], pb[0], pb[1]], usize::MAX), *h);
     }
     for (w, hs) in st.walls.iter().enumerate() {
         for (i, h) in hs.iter().enumerate().filter(|(_, h)| h.active) {
-            out.insert((bits(x[c.slaves[i].0]), [0; 4], w), *h);
+            out.insert((bits(x[c.boundary.slaves[i].0]), [0; 4], w), *h);
         }
     }
     out
@@ -600,7 +600,7 @@ fn remeshing_keeps_the_contact_history_of_the_assembly() {
     assert!(after.len() >= before.len() * 9 / 10, "{} active histories after, {} before", after.len(), before.len());
     // the reference: the same re-mesh with the contact state reset
     let reset = r.contact.as_ref().unwrap().state();
-    let empty = mpfem::contact::driver::ContactState {
+    let empty = mpfem::contact::ContactState {
         nts: Vec::new(),
         walls: reset.walls.iter().map(|w| vec![Default::default(); w.len()]).collect(),
         lm_committed: Vec::new(),
@@ -635,8 +635,7 @@ fn remeshing_keeps_the_contact_history_of_the_assembly() {
 /// one history was moved and none dropped.
 #[test]
 fn a_stick_anchor_on_a_remeshed_master_stays_at_its_point() {
-    use mpfem::contact::driver::{ContactProblem, ContactState};
-    use mpfem::contact::kernels::PairHistory;
+    use mpfem::contact::{ContactState, PairHistory};
     use mpfem::model::Model;
     let text = r#"
 title = "block on slab"
@@ -664,12 +663,12 @@ dt = 0.1
 "#;
     let c = mpfem::case::parse(text, std::path::Path::new(".")).unwrap();
     let model = Model::from_case(&c).unwrap();
-    let mut old = ContactProblem::new(&model, model.walls.clone(), model.contact.clone()).unwrap();
+    let mut old = model.contact_problem().unwrap();
     let x = model.x0.clone();
     // the block's node at (3, 4) and the slab's top segment under it, from x = 3 to 4 (the slab's
     // top side runs right to left: the body lies on the segment's left)
     let slave = (0..model.bodies[0].mesh.n_nodes()).find(|&k| x[k] == [3.0, 4.0]).unwrap();
-    let seg = old.segments.iter().position(|s| s.body == 1 && x[s.nodes[0]] == [4.0, 4.0] && x[s.nodes[1]] == [3.0, 4.0]).unwrap();
+    let seg = old.boundary.segments.iter().position(|s| s.body == 1 && x[s.nodes[0]] == [4.0, 4.0] && x[s.nodes[1]] == [3.0, 4.0]).unwrap();
     // ξ along the segment from (4, 4) to (3, 4): the anchor at x = 3.4 is ξ = 0.6
     let h = PairHistory { xi_stick: 0.6, lambda_n: 5.0, lambda_t: 1.0, active: true };
     let st = old.state();
@@ -679,7 +678,7 @@ dt = 0.1
     let near = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).abs() + (p[1] - q[1]).abs() < 1e-9;
     assert!(!new_mesh.nodes.iter().any(|&p| near(p, [3.0, 4.0]) || near(p, [4.0, 4.0])), "the new top side must not keep the old segment's nodes");
     let new_model = model.with_body_mesh(1, new_mesh).unwrap();
-    let mut new = ContactProblem::new(&new_model, new_model.walls.clone(), new_model.contact.clone()).unwrap();
+    let mut new = new_model.contact_problem().unwrap();
     let mut node_map = vec![None; model.x0.len()];
     for k in 0..model.bodies[0].mesh.n_nodes() {
         node_map[model.bodies[0].node_offset + k] = Some(new_model.bodies[0].node_offset + k);
@@ -691,7 +690,7 @@ dt = 0.1
     let ((s_new, k), h_new) = st.nts[0];
     let xn = &new_model.x0;
     assert_eq!(xn[s_new], [3.0, 4.0]);
-    let s = new.segments[k];
+    let s = new.boundary.segments[k];
     assert_eq!(s.body, 1);
     let (a, b) = (xn[s.nodes[0]], xn[s.nodes[1]]);
     assert!(mpfem::contact::search::point_segment_distance([3.0, 4.0], a, b) < 1e-12, "segment {a:?}-{b:?} is not under the slave node");

@@ -317,17 +317,17 @@ fn solver_carries_j0_across_commits() {
         if let Some(x0) = x0 {
             model.x0 = x0;
         }
-        let n_prescribed_nodes = model.prescribed.len() / 2;
+        let n_prescribed_nodes = model.loading.prescribed.len() / 2;
         assert_eq!(n_prescribed_nodes, model.n_nodes(), "every node is prescribed");
         Simulation::new(model, base.time, base.solver).unwrap()
     };
     // prescribed u = (F − I) X over the model's own reference coordinates; the case's ramp
     // amplitude is 1 for t ≥ t_end = 1
     let prescribe = |sim: &mut Simulation, f: &M2| {
-        for k in 0..sim.model.prescribed.len() {
-            let dof = sim.model.prescribed[k].dof;
+        for k in 0..sim.model.loading.prescribed.len() {
+            let dof = sim.model.loading.prescribed[k].dof;
             let p = sim.model.x0[dof / 2];
-            sim.model.prescribed[k].value = apply(f, p)[dof % 2] - p[dof % 2];
+            sim.model.loading.prescribed[k].value = apply(f, p)[dof % 2] - p[dof % 2];
         }
     };
 

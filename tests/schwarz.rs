@@ -81,7 +81,7 @@ fn run(c: &case::Case) -> Run {
     let s = sim
         .run(&mut |sim, r| {
             pressure.push(r.compaction.as_ref().unwrap().pressure);
-            let t = &sim.timing;
+            let t = sim.timing();
             let (solves, its) = (t.linear_solves - last.0, t.linear_iterations - last.1);
             last = (t.linear_solves, t.linear_iterations);
             per_step.push(its as f64 / solves.max(1) as f64);

@@ -88,7 +88,6 @@
 //! does not converge while new apex contacts form; `segment` completes it). Hence `segment`
 //! stays the default.
 
-use super::kernels::{ContactKind, PairHistory, PenaltyParams};
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// Number of dofs of a smoothed pair: slave, master 1, master 2, neighbour 0, neighbour 3.
@@ -416,7 +415,7 @@ impl<S: Scalar> Curve<S> {
 
 /// Closest-point projection of a slave node on the smoothed master (f64 only).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SmoothGeometry {
+pub struct SmoothProjection {
     /// Curve parameter of the closest point (in [0, 1] on the segment, extrapolated outside).
     pub xi: f64,
     /// Signed gap along the smoothed normal, negative = penetration (mm).
@@ -491,13 +490,13 @@ fn project_f64(curve: &Curve<f64>, xs: [f64; 2]) -> Option<f64> {
 
 /// Closest-point projection of `xs` on the smoothed master `m` (f64). `None` for a degenerate
 /// segment or when the projection has no minimum (see the module docs).
-pub fn smooth_project(xs: [f64; 2], m: &Master) -> Option<SmoothGeometry> {
+pub fn smooth_project(xs: [f64; 2], m: &Master) -> Option<SmoothProjection> {
     let (th, _) = end_angles(m);
     let curve = Curve::<f64>::new(m.x1, m.x2, th)?;
     let xi = project_f64(&curve, xs)?;
     let [c, c1, _] = curve.eval(xi);
     let n = unit([c1[1], -c1[0]]);
-    Some(SmoothGeometry { xi, gap: dot(sub(xs, c), n), normal: n, length: curve.l })
+    Some(SmoothProjection { xi, gap: dot(sub(xs, c), n), normal: n, length: curve.l })
 }
 
 /// The point c(ξ) of the smoothed master `m` (f64; the cubic, also outside [0, 1]). `None` for
@@ -506,49 +505,6 @@ pub fn smooth_point(m: &Master, xi: f64) -> Option<[f64; 2]> {
     let (th, _) = end_angles(m);
     let curve = Curve::<f64>::new(m.x1, m.x2, th)?;
     Some(curve.eval(xi)[0])
-}
-
-/// Output of [`nts_smooth_pair`]. Dofs `[s_x, s_y, 1_x, 1_y, 2_x, 2_y, 0_x, 0_y, 3_x, 3_y]`
-/// (the entries of an absent neighbour are zero).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SmoothPairOut {
-    /// Contact contribution to the internal force, f_c = A(−p_N ∇g + t_T ∇g_T) (N/mm).
-    pub f: [f64; NDOF],
-    /// K_c = ∂f_c/∂x (N/mm²).
-    pub k: [[f64; NDOF]; NDOF],
-    /// δg at fixed end angles: the direction of the force −p A δg (Lagrange multiplier columns).
-    pub grad: [f64; NDOF],
-    /// dg, the full gradient of the gap including the end angles' dependence on the
-    /// neighbours (Lagrange multiplier rows).
-    pub grad_full: [f64; NDOF],
-    pub gap: f64,
-    pub xi: f64,
-    /// Smoothed outward normal of the master at the projection.
-    pub normal: [f64; 2],
-    pub pressure: f64,
-    pub shear: f64,
-    pub slip: bool,
-    pub active: bool,
-    pub new_history: PairHistory,
-}
-
-impl Default for SmoothPairOut {
-    fn default() -> Self {
-        Self {
-            f: [0.0; NDOF],
-            k: [[0.0; NDOF]; NDOF],
-            grad: [0.0; NDOF],
-            grad_full: [0.0; NDOF],
-            gap: f64::INFINITY,
-            xi: 0.5,
-            normal: [0.0; 2],
-            pressure: 0.0,
-            shear: 0.0,
-            slip: false,
-            active: false,
-            new_history: PairHistory::default(),
-        }
-    }
 }
 
 /// Gap g and tangential gap g_T as functions of (x_s, x₁, x₂, θ₁, θ₂) — slots 0..6 and 6, 7 of
@@ -594,100 +550,29 @@ fn split(q: &D, jac: &[[f64; NDOF]; 2]) -> ([f64; NDOF], [f64; NDOF], [[f64; NDO
     (var, full, h)
 }
 
-/// Node-to-segment pair on the smoothed master surface: the laws, signs and history of
-/// [`super::kernels::nts_pair`] with the gap, normal and ξ of the smoothed surface (see the
-/// module docs). Frictionless, Coulomb and tied pairs.
-#[allow(clippy::too_many_arguments)]
-pub fn nts_smooth_pair(xs: [f64; 2], m: &Master, area: f64, kind: ContactKind, params: &PenaltyParams, old: &PairHistory, out: &mut SmoothPairOut) {
-    *out = SmoothPairOut::default();
-    let Some(geo) = smooth_project(xs, m) else {
-        tracing::debug!(?xs, ?m, "smoothed contact: no closest point on the master surface, pair inactive");
-        out.new_history = PairHistory { xi_stick: 0.5, lambda_n: 0.0, lambda_t: 0.0, active: false };
-        return;
-    };
-    out.gap = geo.gap;
-    out.xi = geo.xi;
-    out.normal = geo.normal;
-    let inactive_history = PairHistory { xi_stick: geo.xi, lambda_n: 0.0, lambda_t: 0.0, active: false };
-    out.new_history = inactive_history;
-    let cohering = matches!(kind, ContactKind::Cohering);
-    let p = old.lambda_n - params.eps_n * geo.gap;
-    if !cohering && !(p > 0.0) {
-        return;
-    }
-    let fresh = !old.active || !(params.eps_t > 0.0);
-    let xa = if fresh { geo.xi } else { old.xi_stick };
-    let (th, jac) = end_angles(m);
-    let Some((gd, gtd)) = derivatives(xs, m, th, geo.xi, xa) else {
-        tracing::debug!(?xs, ?m, "smoothed contact: projection lost its minimum, pair inactive");
-        return;
-    };
-    let l = geo.length;
-    let t_trial = old.lambda_t + params.eps_t * gtd.v;
-    // δg, dg, d(δg) and the same for g_T (see `split`)
-    let (gv, gf, gh) = split(&gd, &jac);
-    let (tv, tf, th2) = split(&gtd, &jac);
-    let (tau, law) = super::kernels::friction_law(kind, fresh, t_trial, p);
-    let mut anchor = xa;
-    let lambda_t = if fresh { 0.0 } else { old.lambda_t };
-
-    let mut f = [0.0; NDOF];
-    let mut k = [[0.0; NDOF]; NDOF];
-    for i in 0..NDOF {
-        f[i] = -p * area * gv[i];
-        for j in 0..NDOF {
-            k[i][j] = params.eps_n * area * gv[i] * gf[j] - p * area * gh[i][j];
-        }
-    }
-    match law {
-        super::kernels::TangLaw::None => {
-            if !fresh && !cohering {
-                anchor = geo.xi;
-            }
-        }
-        super::kernels::TangLaw::Stick | super::kernels::TangLaw::Slip(_) => {
-            for i in 0..NDOF {
-                f[i] += tau * area * tv[i];
-                for j in 0..NDOF {
-                    k[i][j] += tau * area * th2[i][j];
-                }
-            }
-            match law {
-                super::kernels::TangLaw::Stick => {
-                    for i in 0..NDOF {
-                        for j in 0..NDOF {
-                            k[i][j] += params.eps_t * area * tv[i] * tf[j];
-                        }
-                    }
-                }
-                super::kernels::TangLaw::Slip(smu) => {
-                    // ∇t_T = μ sign ∇p_N = −μ sign ε_N ∇g (non-symmetric)
-                    for i in 0..NDOF {
-                        for j in 0..NDOF {
-                            k[i][j] -= smu * params.eps_n * area * tv[i] * gf[j];
-                        }
-                    }
-                    anchor = geo.xi - (tau - lambda_t) / (params.eps_t * l);
-                    out.slip = true;
-                }
-                super::kernels::TangLaw::None => {}
-            }
-        }
-    }
-    out.f = f;
-    out.k = k;
-    out.grad = gv;
-    out.grad_full = gf;
-    out.pressure = p;
-    out.shear = tau;
-    out.active = true;
-    out.new_history = PairHistory { xi_stick: anchor, lambda_n: old.lambda_n, lambda_t, active: true };
+/// The variations of the gap g and the tangential gap g_T of a slave node at `xs` whose
+/// closest point on the smoothed master `m` is at `xi`, g_T measured from the anchor `anchor`
+/// (see the module docs: the force at fixed end angles, the tangent in full).
+#[derive(Clone, Copy, Debug)]
+pub struct Variations {
+    /// g_T (mm).
+    pub gt: f64,
+    /// δg at fixed end angles (the force), dg in full, d(δg).
+    pub gv: [f64; NDOF],
+    pub gf: [f64; NDOF],
+    pub gh: [[f64; NDOF]; NDOF],
+    /// The same for g_T.
+    pub tv: [f64; NDOF],
+    pub tf: [f64; NDOF],
+    pub th: [[f64; NDOF]; NDOF],
 }
 
-/// Uzawa update of a smoothed pair (as [`super::kernels::augment`]).
-pub fn augment(out: &SmoothPairOut) -> PairHistory {
-    if !out.active {
-        return PairHistory { xi_stick: out.xi, lambda_n: 0.0, lambda_t: 0.0, active: false };
-    }
-    PairHistory { xi_stick: if out.slip { out.xi } else { out.new_history.xi_stick }, lambda_n: out.pressure, lambda_t: out.shear, active: true }
+/// [`Variations`] of a pair, or `None` when the projection has no minimum in second-order
+/// arithmetic (the pair is then inactive).
+pub fn variations(xs: [f64; 2], m: &Master, xi: f64, anchor: f64) -> Option<Variations> {
+    let (th, jac) = end_angles(m);
+    let (gd, gtd) = derivatives(xs, m, th, xi, anchor)?;
+    let (gv, gf, gh) = split(&gd, &jac);
+    let (tv, tf, th) = split(&gtd, &jac);
+    Some(Variations { gt: gtd.v, gv, gf, gh, tv, tf, th })
 }

@@ -11,7 +11,7 @@ pub mod direct;
 pub mod pcg;
 pub mod schwarz;
 
-pub use csr::CsrMatrix;
+pub use csr::{BlockMap, CsrMatrix, NO_ROW};
 pub use direct::FillOrdering;
 
 use thiserror::Error;
@@ -27,6 +27,28 @@ pub enum LinearSolverKind {
     Cholesky,
     /// Preconditioned conjugate gradients (symmetric positive definite matrices).
     Pcg,
+}
+
+/// The linear solver a run asks for (`[solver] linear`): a fixed kind, or `Auto`, which the
+/// symmetry of the tangent decides ([`LinearChoice::resolve`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LinearChoice {
+    #[default]
+    Auto,
+    Fixed(LinearSolverKind),
+}
+
+impl LinearChoice {
+    /// The solver: `Auto` is the sparse Cholesky factorisation (LLᵀ with the LDLᵀ fallbacks)
+    /// when the tangent is symmetric ([`crate::model::symmetric_tangent`] decides), LU
+    /// otherwise.
+    pub fn resolve(self, symmetric: bool) -> LinearSolverKind {
+        match self {
+            LinearChoice::Fixed(k) => k,
+            LinearChoice::Auto if symmetric => LinearSolverKind::Cholesky,
+            LinearChoice::Auto => LinearSolverKind::Lu,
+        }
+    }
 }
 
 /// Preconditioner for [`LinearSolverKind::Pcg`].

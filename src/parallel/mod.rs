@@ -49,27 +49,14 @@
 pub use crate::comm::{launch, Collective, Serial};
 
 use crate::assembly::{AssemblyError, ElementFields};
+use crate::contact::problem::{PairEval, WallEval};
+use crate::contact::{ContactEvals, PairHistory};
 use crate::element::N_ENH;
 use crate::material::{MatState, MaterialError};
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use std::time::Instant;
-
-/// The contact kernels of a distributed run: each process evaluates the pairs of the slave
-/// nodes of the bodies it owns, and the records go to every process (the tangent blocks to
-/// rank 0).
-impl crate::contact::driver::PairExchange for Distribution {
-    fn evaluates(&self, body: usize) -> bool {
-        self.body_owner.get(body) == Some(&self.comm.rank())
-    }
-    fn all_gather(&self, local: Vec<f64>) -> Vec<f64> {
-        self.comm.all_gather_varcount(&local)
-    }
-    fn gather_to_root(&self, local: Vec<f64>) -> Vec<f64> {
-        self.comm.gather_varcount_to_root(&local)
-    }
-}
 
 /// Values per element exchanged by [`Distribution::sync_fields`]: 4 Gauss points × (state: 6,
 /// stress: 4), pressure, Θ and the enhanced modes.
@@ -278,4 +265,88 @@ impl Distribution {
             fields.alpha[e].iter_mut().for_each(|v| *v = get());
         }
     }
+
+    /// Whether this process owns body `b` (evaluates its elements and the contact pairs of its
+    /// slave nodes).
+    pub fn owns_body(&self, b: usize) -> bool {
+        self.body_owner.get(b) == Some(&self.comm.rank())
+    }
+
+    /// The contact evaluations of every process, concatenated in process order, on every
+    /// process; the tangent blocks (`tangent`) on rank 0 only. `width` is the contact's pair
+    /// width (6 or 10 dofs).
+    pub fn gather_contact(&self, local: &ContactEvals, tangent: bool, width: usize) -> ContactEvals {
+        let mut out = ContactEvals::default();
+        let mut buf = Vec::new();
+        for e in &local.pairs {
+            write_pair(e, &mut buf);
+        }
+        out.pairs = self.comm.all_gather_varcount(&buf).chunks_exact(PAIR_WIDTH).map(read_pair).collect();
+        buf.clear();
+        for e in &local.walls {
+            write_wall(e, &mut buf);
+        }
+        out.walls = self.comm.all_gather_varcount(&buf).chunks_exact(WALL_WIDTH).map(read_wall).collect();
+        buf.clear();
+        for &(i, g) in &local.gaps {
+            buf.extend_from_slice(&[i as f64, g]);
+        }
+        out.gaps = self.comm.all_gather_varcount(&buf).chunks_exact(2).map(|r| (r[0] as usize, r[1])).collect();
+        if tangent {
+            let indices = |v: &[usize]| v.iter().map(|&k| k as f64).collect::<Vec<f64>>();
+            out.pair_blocks = self.comm.gather_varcount_to_root(&indices(&local.pair_blocks)).iter().map(|&k| k as usize).collect();
+            out.pair_block_values = self.comm.gather_varcount_to_root(&local.pair_block_values);
+            out.wall_blocks = self.comm.gather_varcount_to_root(&indices(&local.wall_blocks)).iter().map(|&k| k as usize).collect();
+            out.wall_block_values = self.comm.gather_varcount_to_root(&local.wall_block_values);
+            debug_assert!(!self.comm.is_root() || out.pair_block_values.len() == out.pair_blocks.len() * width * width);
+        }
+        out
+    }
+}
+
+/// Values of a node-to-segment evaluation in an exchange: pair index, force (10), gap,
+/// pressure, violation, slip, active, trial history (4), augmented history (4).
+const PAIR_WIDTH: usize = 1 + crate::contact::smooth::NDOF + 5 + 8;
+/// Values of a node-to-wall evaluation: key, force (2), the same scalars and histories.
+const WALL_WIDTH: usize = 1 + 2 + 5 + 8;
+
+fn put_history(v: &mut Vec<f64>, h: &PairHistory) {
+    v.extend_from_slice(&[h.xi_stick, h.lambda_n, h.lambda_t, f64::from(u8::from(h.active))]);
+}
+
+fn get_history(v: &[f64]) -> PairHistory {
+    PairHistory { xi_stick: v[0], lambda_n: v[1], lambda_t: v[2], active: v[3] != 0.0 }
+}
+
+fn flag(b: bool) -> f64 {
+    f64::from(u8::from(b))
+}
+
+fn write_pair(e: &PairEval, v: &mut Vec<f64>) {
+    v.push(e.pair as f64);
+    v.extend_from_slice(&e.f);
+    v.extend_from_slice(&[e.gap, e.pressure, e.violation, flag(e.slip), flag(e.active)]);
+    put_history(v, &e.trial);
+    put_history(v, &e.aug);
+}
+
+fn read_pair(r: &[f64]) -> PairEval {
+    const N: usize = crate::contact::smooth::NDOF;
+    let mut f = [0.0; N];
+    f.copy_from_slice(&r[1..1 + N]);
+    let s = &r[1 + N..];
+    PairEval { pair: r[0] as usize, f, gap: s[0], pressure: s[1], violation: s[2], slip: s[3] != 0.0, active: s[4] != 0.0, trial: get_history(&s[5..9]), aug: get_history(&s[9..13]) }
+}
+
+fn write_wall(e: &WallEval, v: &mut Vec<f64>) {
+    v.push(e.key as f64);
+    v.extend_from_slice(&e.f);
+    v.extend_from_slice(&[e.gap, e.pressure, e.violation, flag(e.slip), flag(e.active)]);
+    put_history(v, &e.trial);
+    put_history(v, &e.aug);
+}
+
+fn read_wall(r: &[f64]) -> WallEval {
+    let s = &r[3..];
+    WallEval { key: r[0] as usize, f: [r[1], r[2]], gap: s[0], pressure: s[1], violation: s[2], slip: s[3] != 0.0, active: s[4] != 0.0, trial: get_history(&s[5..9]), aug: get_history(&s[9..13]) }
 }

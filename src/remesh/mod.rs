@@ -35,7 +35,7 @@
 //! λ_e), tested exact for a homogeneous history, and
 //! [`crate::solver::Simulation::remesh_body`] re-meshes a body of a running simulation with it
 //! (tested mid-run: wall forces within 1 %). With `[remesh]` in the case
-//! ([`crate::case::RemeshSpec`]) the solver calls it after every converged step for the worst
+//! ([`RemeshSpec`]) the solver calls it after every converged step for the worst
 //! free particle that crosses the quality limits (one per step), and once per step for the particle of an inverted
 //! element when its mesh is already near the limits; then
 //! [`crate::solver::Simulation::equilibrate`] balances the transferred state in place
@@ -126,6 +126,27 @@ use thiserror::Error;
 pub use body::{transfer_body, BodyState, BodyTransfer};
 pub use locate::{Location, PointLocator};
 pub use monitor::{check_quality, QualityCheck, QualityLimits, QualityMeasure, Worst};
+
+/// The `[remesh]` table: adaptive re-meshing of deformed particles (see [`crate::remesh`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemeshSpec {
+    /// Re-mesh a particle whose mesh crosses the quality limits after a converged step, and
+    /// re-mesh and retry a step that inverts an element.
+    pub enabled: bool,
+    /// The quality limits (scaled Jacobian, aspect ratio, smallest corner angle).
+    pub limits: QualityLimits,
+    /// Target element size of the new meshes (mm); `None`: each body's own `mesh_size`.
+    pub mesh_size: Option<f64>,
+    /// Largest number of re-meshes in one run (all particles together); past it the run goes
+    /// on without re-meshing.
+    pub max_remeshes: usize,
+}
+
+impl Default for RemeshSpec {
+    fn default() -> Self {
+        Self { enabled: false, limits: QualityLimits::default(), mesh_size: None, max_remeshes: 10_000 }
+    }
+}
 pub use state::{deformation_gradient, state_from_components, state_to_components, states_from_field, states_to_field, STATE_COMPONENTS};
 pub use transfer::{quadrature_points, FieldTransfer, L2Projector, NodalField, QuadField, TransferStats};
 

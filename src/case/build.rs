@@ -1,0 +1,202 @@
+//! The case file builds the model: every body meshed in one global numbering, the loading
+//! (walls, prescribed displacements, loads, amplitudes) and the parameter structs of each part
+//! of the physics. This is where the case file stops.
+
+use super::{BodySpec, Case, ShapeSpec};
+use crate::contact::ContactParams;
+use crate::loading::{Amplitude, EdgeLoad, Loading, PrescribedDof, WallMotion, WallTravel};
+use crate::mesh::{shapes, Mesh};
+use crate::model::{Body, Model, ModelError, NodeGroup};
+use crate::stabilise::StabilisationParams;
+
+/// Mesh one body's shape at its mesh size / divisions.
+pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
+    let h = b.mesh_size;
+    let div = |i: usize, len: f64| b.divisions.map_or_else(|| shapes::divisions_for(len, h), |d| d[i]);
+    Ok(match &b.shape {
+        ShapeSpec::Rectangle { origin, size } => {
+            shapes::rectangle(*origin, size[0], size[1], div(0, size[0]), div(1, size[1]))
+        }
+        ShapeSpec::Cook => shapes::cook_membrane(div(0, 48.0), div(1, 44.0)),
+        ShapeSpec::Disc { center, radius } => shapes::disc(*center, *radius, h),
+        ShapeSpec::Ellipse { center, semi_axes, angle_deg } => shapes::ellipse(*center, *semi_axes, *angle_deg, h),
+        ShapeSpec::Polygon { vertices } => shapes::convex_polygon(vertices, h).map_err(|e| e.to_string())?,
+        ShapeSpec::Outline { vertices } => crate::mesh::polygon::simple_polygon(vertices, h).map_err(|e| e.to_string())?,
+        ShapeSpec::Gmsh { mesh, .. } => (**mesh).clone(),
+        ShapeSpec::AnnulusSector { center, inner_radius, outer_radius, angles_deg } => {
+            let arc = 0.5 * (inner_radius + outer_radius) * (angles_deg[1] - angles_deg[0]).abs().to_radians();
+            shapes::annulus_sector(
+                *center,
+                *inner_radius,
+                *outer_radius,
+                angles_deg[0],
+                angles_deg[1],
+                div(0, outer_radius - inner_radius),
+                div(1, arc),
+            )
+        }
+    })
+}
+
+impl Case {
+    /// The contact parameters of the model: the `[contact]` table, and each wall's contact kind.
+    pub fn contact_params(&self) -> ContactParams {
+        let c = &self.contact;
+        ContactParams {
+            method: c.method,
+            kind: c.kind,
+            walls: self.walls.iter().map(|w| w.kind).collect(),
+            penalty: c.penalty,
+            penetration_tol: c.penetration_tol,
+            max_augmentations: c.max_augmentations,
+            search_distance: c.search_distance,
+            lagrange_regularisation: c.lagrange_regularisation,
+            normal: c.normal,
+        }
+    }
+
+    /// The stabilisation parameters of the model (the springs' keys of `[contact]`).
+    pub fn stabilisation_params(&self) -> StabilisationParams {
+        let c = &self.contact;
+        StabilisationParams {
+            factor: c.stabilisation,
+            scope: c.stabilise,
+            kind: c.stabilisation_kind,
+            viscous_retry: c.viscous_retry,
+            stiffen_on_cutback: c.stiffen_on_cutback,
+            regularisation: c.regularisation,
+        }
+    }
+}
+
+impl Model {
+    /// The model of a validated case.
+    ///
+    /// # Errors
+    /// A body whose shape cannot be meshed, an edge set that does not exist.
+    pub fn from_case(case: &Case) -> Result<Self, ModelError> {
+        let mut bodies = Vec::with_capacity(case.bodies.len());
+        let mut x0 = Vec::new();
+        let mut elements = Vec::new();
+        let mut elem_material = Vec::new();
+        let mut elem_body = Vec::new();
+        for (ib, b) in case.bodies.iter().enumerate() {
+            let mesh = mesh_body(b).map_err(|message| ModelError::Mesh { body: ib, name: b.name.clone(), message })?;
+            let node_offset = x0.len();
+            let elem_offset = elements.len();
+            x0.extend_from_slice(&mesh.nodes);
+            for e in &mesh.elements {
+                elements.push(e.map(|n| n + node_offset));
+                elem_material.push(b.material);
+                elem_body.push(ib);
+            }
+            let contact_h = Body::mean_element_size(&mesh);
+            bodies.push(Body { name: b.name.clone(), mesh, material: b.material, node_offset, elem_offset, mesh_size: b.mesh_size, contact_h });
+        }
+
+        let mut amplitudes: Vec<Amplitude> = Vec::new();
+        let mut amp_index = |a: &Amplitude| -> usize {
+            amplitudes.push(a.clone());
+            amplitudes.len() - 1
+        };
+
+        let global_set = |key: &str, body: usize, set: &str| -> Result<(Vec<usize>, Vec<[usize; 2]>), ModelError> {
+            let b = &bodies[body];
+            let edges = b.mesh.edge_sets.get(set).ok_or_else(|| ModelError::MissingSet {
+                key: key.to_string(),
+                body: b.name.clone(),
+                set: set.to_string(),
+            })?;
+            let nodes = b.mesh.node_set(set).unwrap_or_default().into_iter().map(|n| n + b.node_offset).collect();
+            let edges = edges.iter().map(|e| e.map(|n| n + b.node_offset)).collect();
+            Ok((nodes, edges))
+        };
+
+        let mut prescribed: Vec<PrescribedDof> = Vec::new();
+        for (i, d) in case.boundary.iter().enumerate() {
+            let key = format!("boundary[{i}].set");
+            let (nodes, _) = global_set(&key, d.body, &d.set)?;
+            let amp = amp_index(&d.amplitude);
+            let center = case.bodies[d.body].shape.center().unwrap_or([0.0, 0.0]);
+            for &n in &nodes {
+                let mut set_dof = |dof: usize, value: f64| {
+                    if let Some(p) = prescribed.iter_mut().find(|p| p.dof == dof) {
+                        p.value = value;
+                        p.amplitude = amp;
+                    } else {
+                        prescribed.push(PrescribedDof { dof, value, amplitude: amp });
+                    }
+                };
+                if let Some(r) = d.radial {
+                    let dx = x0[n][0] - center[0];
+                    let dy = x0[n][1] - center[1];
+                    let len = (dx * dx + dy * dy).sqrt().max(f64::MIN_POSITIVE);
+                    set_dof(2 * n, r * dx / len);
+                    set_dof(2 * n + 1, r * dy / len);
+                }
+                if let Some(ux) = d.ux {
+                    set_dof(2 * n, ux);
+                }
+                if let Some(uy) = d.uy {
+                    set_dof(2 * n + 1, uy);
+                }
+            }
+        }
+        prescribed.sort_by_key(|p| p.dof);
+
+        let mut loads = Vec::new();
+        for (i, l) in case.loads.iter().enumerate() {
+            let key = format!("loads[{i}].set");
+            let (_, edges) = global_set(&key, l.body, &l.set)?;
+            let length0 = edges
+                .iter()
+                .map(|e| {
+                    let (a, b) = (x0[e[0]], x0[e[1]]);
+                    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+                })
+                .sum();
+            loads.push(EdgeLoad { edges, kind: l.kind.clone(), amplitude: amp_index(&l.amplitude), length0 });
+        }
+
+        let group = |(body, set): &(usize, String), prefix: &str| -> Result<NodeGroup, ModelError> {
+            let (nodes, _) = global_set(&format!("output.{prefix}"), *body, set)?;
+            Ok(NodeGroup { label: format!("{}_{}", bodies[*body].name, set), nodes })
+        };
+        let reaction_groups = case.output.reactions.iter().map(|g| group(g, "reactions")).collect::<Result<_, _>>()?;
+        let displacement_groups =
+            case.output.displacements.iter().map(|g| group(g, "displacements")).collect::<Result<_, _>>()?;
+
+        let walls = case
+            .walls
+            .iter()
+            .map(|w| WallMotion {
+                side: w.side,
+                position: w.position,
+                travel: match &w.travel {
+                    None => WallTravel::Velocity(w.velocity),
+                    Some((travel, a)) => WallTravel::Amplitude { travel: *travel, amplitude: amp_index(a) },
+                },
+            })
+            .collect();
+        let loading = Loading { walls, prescribed, loads, amplitudes, t_end: case.time.end };
+        Ok(Self {
+            title: case.title.clone(),
+            formulation: case.formulation,
+            element: case.element,
+            loading,
+            contact: case.contact_params(),
+            stabilisation: case.stabilisation_params(),
+            stop: case.stop.clone(),
+            remesh: case.remesh.clone(),
+            materials: case.materials.iter().map(|m| m.material.clone()).collect(),
+            densities: case.materials.iter().map(|m| m.density).collect(),
+            bodies,
+            x0,
+            elements,
+            elem_material,
+            elem_body,
+            reaction_groups,
+            displacement_groups,
+        })
+    }
+}

@@ -1,0 +1,473 @@
+//! The TOML case file: schema (serde), validation and the validated [`Case`].
+//!
+//! The schema is documented key by key in `docs/case-file.md`; the built-in default job
+//! ([`DEFAULT_JOB`], `jobs/default.toml`) is a complete, commented example.
+//!
+//! Parsing happens in two stages:
+//! 1. the text is deserialised into private raw structs (module `raw`) that mirror the file
+//!    one-to-one and reject unknown keys and wrong types (`#[serde(deny_unknown_fields)]`);
+//!    syntax and type errors are reported with the key path, line and column;
+//! 2. the raw structs are validated (ranges, finiteness, required keys, cross references,
+//!    duplicated names, files) and converted into the public types below, applying the
+//!    documented defaults.
+//!
+//! Every failure is one [`CaseError`]: the dotted key path (`materials[1].poisson_ratio`) and a
+//! message that states the offending value and what was expected. Nothing here panics on any
+//! input and nothing is printed.
+//!
+//! The case file stops at the model: [`crate::model::Model::from_case`] (module `build`) turns
+//! a validated case into the model and the parameter structs each part of the physics owns
+//! (the element's [`Formulation`], the [`crate::loading::Loading`], the contact's
+//! [`crate::contact::ContactParams`], the [`crate::stabilise::StabilisationParams`], the
+//! solver's [`TimeSpec`] and [`SolverSpec`]); no module of the physics imports this one. The
+//! generators (`[[grids]]`, `[[packings]]`, `[[imports]]`) are validated in module `expand` and
+//! run by [`crate::packing`] and [`crate::mesh::import`].
+
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+mod build;
+mod expand;
+mod raw;
+mod validate;
+mod write;
+
+pub use build::mesh_body;
+use validate::{toml_error, Cx, Locator};
+
+pub use crate::contact::{ContactMethod, ContactNormal};
+pub use crate::element::Formulation;
+pub use crate::linalg::LinearChoice;
+pub use crate::loading::{Amplitude, LoadKind, WallSide};
+pub use crate::model::StopSpec;
+pub use crate::remesh::RemeshSpec;
+pub use crate::solver::{NewtonKind, SolverSpec, TimeSpec};
+pub use crate::stabilise::{StabilisationKind, Stabilise};
+
+use crate::linalg::LinearSolverKind;
+use crate::material::Material;
+
+/// The built-in default job (plane-strain upsetting of an aluminium block).
+pub const DEFAULT_JOB: &str = include_str!("../../jobs/default.toml");
+
+/// Largest accepted `divisions` entry (a guard against absurd meshes).
+pub const MAX_DIVISIONS: i64 = 100_000;
+
+/// Default density, t/mm³.
+pub const DEFAULT_DENSITY: f64 = 1e-9;
+
+/// Largest `count` of a `[[packings]]` entry (the cells are built in O(count²)).
+pub const MAX_PACKING_COUNT: usize = 5000;
+
+/// Default Lloyd relaxation steps of a `[[packings]]` entry.
+pub const DEFAULT_LLOYD: usize = 10;
+
+/// The die `[x0, x1, y0, y1]` (mm) closed by a left, a right, a bottom and a top wall at their
+/// initial positions; `None` unless all four are present.
+pub fn die_of(walls: &[WallSpec]) -> Option<[f64; 4]> {
+    let pos = |side: WallSide| walls.iter().find(|w| w.side == side).map(|w| w.position);
+    Some([pos(WallSide::Left)?, pos(WallSide::Right)?, pos(WallSide::Bottom)?, pos(WallSide::Top)?])
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Error
+// ---------------------------------------------------------------------------------------------
+
+/// A case-file error: the dotted key path and a message naming the value and the expectation.
+///
+/// `Display` prints `KEY: MESSAGE` (or just `MESSAGE` when the error is not tied to a key).
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{}", self.render())]
+pub struct CaseError {
+    /// Dotted key path, e.g. `materials[1].poisson_ratio`; a file path for I/O errors; may be
+    /// empty for syntax errors that are not inside any key.
+    pub key: String,
+    pub message: String,
+}
+
+impl CaseError {
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+
+    fn render(&self) -> String {
+        if self.key.is_empty() {
+            self.message.clone()
+        } else {
+            format!("{}: {}", self.key, self.message)
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validated types
+// ---------------------------------------------------------------------------------------------
+
+/// A validated case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    pub title: String,
+    pub formulation: Formulation,
+    /// Element technology (`[model] element`).
+    pub element: crate::element::ElementKind,
+    pub materials: Vec<MaterialSpec>,
+    pub bodies: Vec<BodySpec>,
+    pub boundary: Vec<DirichletSpec>,
+    pub loads: Vec<LoadSpec>,
+    pub time: TimeSpec,
+    pub solver: SolverSpec,
+    pub output: OutputSpec,
+    /// Rigid walls (empty: no walls).
+    pub walls: Vec<WallSpec>,
+    /// Contact settings (used when there are walls or several bodies).
+    pub contact: ContactSpec,
+    pub stop: StopSpec,
+    /// Adaptive re-meshing of the particles (`[remesh]`).
+    pub remesh: RemeshSpec,
+    /// Directory of the case file; relative paths in the file are resolved against it.
+    pub base_dir: PathBuf,
+}
+
+/// A rigid straight wall: `position` (x of a left/right wall, y of a bottom/top wall, mm, at
+/// t = 0) moving towards the particles at `velocity` (mm/s, positive inward), or by `travel`
+/// (mm) times an amplitude (see [`crate::loading`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WallSpec {
+    pub side: WallSide,
+    pub position: f64,
+    /// Constant inward speed (mm/s); 0 when the wall moves by `travel`.
+    pub velocity: f64,
+    /// Inward travel (mm) and its amplitude, instead of a constant speed.
+    pub travel: Option<(f64, Amplitude)>,
+    pub kind: crate::contact::ContactKind,
+}
+
+/// The `[contact]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactSpec {
+    pub method: ContactMethod,
+    /// Contact kind between particles.
+    pub kind: crate::contact::ContactKind,
+    /// Normal and tangential penalty (MPa/mm); `None` = 10 E_min / h per pair.
+    pub penalty: Option<f64>,
+    /// Augmented Lagrangian: stop when the largest penetration <= this x the element size.
+    pub penetration_tol: f64,
+    pub max_augmentations: usize,
+    /// zeta: every free node is tied to its last converged position by a spring
+    /// zeta * E * a / h^2 (a tributary area, h element size), which keeps particles that touch
+    /// nothing solvable.
+    pub stabilisation: f64,
+    /// Which bodies and directions the stabilisation springs act on.
+    pub stabilise: Stabilise,
+    /// Where the stabilisation springs are anchored.
+    pub stabilisation_kind: StabilisationKind,
+    /// Retry a step that fails with the inertial anchor at the same size with the viscous one
+    /// before cutting back.
+    pub viscous_retry: bool,
+    /// On a step smaller than `[time] dt` the springs stiffen as a fixed nodal mass (inertial
+    /// anchor: by (dt/Δt)²) or a fixed dashpot (viscous anchor: by dt/Δt) would, so that a
+    /// cut-back in general ends where the springs outweigh a loss of stability of the particles
+    /// (a snap-through between two interlocked corners, a buckling column).
+    pub stiffen_on_cutback: bool,
+    /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
+    /// steadies the Newton iterations of weakly held particles without changing the solution
+    /// or dissipating energy.
+    pub regularisation: f64,
+    /// Search distance (mm); `None` = one element size.
+    pub search_distance: Option<f64>,
+    /// Lagrange multipliers: an active constraint is g + r λ / c = 0 (c the default penalty),
+    /// a perturbed Lagrangian that keeps the system regular where two candidates constrain the
+    /// same gap (a node facing a node, symmetric ties). 0 = exact constraints.
+    pub lagrange_regularisation: f64,
+    /// Contact normal of the node-to-segment pairs: straight segments or a smoothed surface.
+    pub normal: ContactNormal,
+}
+
+impl Default for ContactSpec {
+    fn default() -> Self {
+        Self {
+            method: ContactMethod::Penalty,
+            kind: crate::contact::ContactKind::Sliding,
+            penalty: None,
+            penetration_tol: 0.01,
+            max_augmentations: 20,
+            stabilisation: 1e-5,
+            stabilise: Stabilise::All,
+            stabilisation_kind: StabilisationKind::Inertial,
+            viscous_retry: false,
+            stiffen_on_cutback: false,
+            regularisation: 0.0,
+            search_distance: None,
+            lagrange_regularisation: 1e-4,
+            normal: ContactNormal::default(),
+        }
+    }
+}
+
+/// A named material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialSpec {
+    pub name: String,
+    /// t/mm³.
+    pub density: f64,
+    pub material: Material,
+}
+
+/// A body: one shape meshed with one material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodySpec {
+    pub name: String,
+    /// Index into [`Case::materials`].
+    pub material: usize,
+    pub shape: ShapeSpec,
+    /// Target element edge length h (mm).
+    pub mesh_size: f64,
+    /// Structured divisions `[n along x or radius, n along y or circumference]` (rectangle,
+    /// cook, annulus sector only); overrides `mesh_size` there.
+    pub divisions: Option<[usize; 2]>,
+}
+
+
+/// Geometry of a body (mm, degrees).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ShapeSpec {
+    Rectangle {
+        origin: [f64; 2],
+        size: [f64; 2],
+    },
+    Disc {
+        center: [f64; 2],
+        radius: f64,
+    },
+    Ellipse {
+        center: [f64; 2],
+        semi_axes: [f64; 2],
+        angle_deg: f64,
+    },
+    Polygon {
+        vertices: Vec<[f64; 2]>,
+    },
+    /// The standard Cook membrane: trapezoid (0,0), (48,44), (48,60), (0,44).
+    Cook,
+    AnnulusSector {
+        center: [f64; 2],
+        inner_radius: f64,
+        outer_radius: f64,
+        angles_deg: [f64; 2],
+    },
+    /// Any simple polygon (possibly non-convex), meshed by
+    /// [`crate::mesh::polygon::simple_polygon`].
+    Outline {
+        vertices: Vec<[f64; 2]>,
+    },
+    /// One 2D physical group of a gmsh file (see [`crate::mesh::import`]), scaled by `scale`
+    /// about the origin and then shifted by `offset`; `mesh` is the group's mesh so placed.
+    Gmsh {
+        /// The file, resolved against the case file's directory (absolute).
+        file: PathBuf,
+        /// The group's physical name, or its tag (decimal) when it has no name.
+        group: String,
+        scale: f64,
+        offset: [f64; 2],
+        mesh: std::sync::Arc<crate::mesh::Mesh>,
+    },
+}
+
+impl ShapeSpec {
+    /// The lower-case name used in the case file (`type = ...`).
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            ShapeSpec::Rectangle { .. } => "rectangle",
+            ShapeSpec::Disc { .. } => "disc",
+            ShapeSpec::Ellipse { .. } => "ellipse",
+            ShapeSpec::Polygon { .. } => "polygon",
+            ShapeSpec::Cook => "cook",
+            ShapeSpec::AnnulusSector { .. } => "annulus_sector",
+            ShapeSpec::Outline { .. } => "outline",
+            ShapeSpec::Gmsh { .. } => "gmsh",
+        }
+    }
+
+    /// Names of the edge sets the mesher provides for this shape.
+    pub fn edge_set_names(&self) -> Vec<String> {
+        let names: &[&str] = match self {
+            ShapeSpec::Rectangle { .. } | ShapeSpec::Cook => {
+                &["left", "right", "bottom", "top", "boundary"]
+            }
+            ShapeSpec::Disc { .. } | ShapeSpec::Ellipse { .. } => &["outer", "boundary"],
+            ShapeSpec::Outline { .. } | ShapeSpec::Gmsh { .. } => &["boundary"],
+            ShapeSpec::AnnulusSector { .. } => &["inner", "outer", "start", "end", "boundary"],
+            ShapeSpec::Polygon { vertices } => {
+                let mut v = vec!["boundary".to_string()];
+                v.extend((0..vertices.len()).map(|i| format!("side{i}")));
+                return v;
+            }
+        };
+        names.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// The convex outline used by the overlap check; `None` for the shapes that are not convex
+    /// (annulus sector, outline, gmsh; see [`ShapeSpec::particle`]). A polygon stands for the
+    /// convex hull of its vertices.
+    pub fn convex(&self) -> Option<crate::packing::overlap::Convex> {
+        use crate::packing::overlap::Convex;
+        Some(match self {
+            ShapeSpec::Disc { center, radius } => Convex::Disc { center: *center, radius: *radius },
+            ShapeSpec::Ellipse { center, semi_axes, angle_deg } => Convex::Ellipse { center: *center, semi_axes: *semi_axes, angle_deg: *angle_deg },
+            ShapeSpec::Polygon { vertices } => Convex::Polygon(vertices.clone()),
+            ShapeSpec::Rectangle { origin: o, size: s } => Convex::Polygon(vec![*o, [o[0] + s[0], o[1]], [o[0] + s[0], o[1] + s[1]], [o[0], o[1] + s[1]]]),
+            ShapeSpec::Cook => Convex::Polygon(vec![[0.0, 0.0], [48.0, 44.0], [48.0, 60.0], [0.0, 44.0]]),
+            ShapeSpec::AnnulusSector { .. } | ShapeSpec::Outline { .. } | ShapeSpec::Gmsh { .. } => return None,
+        })
+    }
+
+    /// The particle outline used by the overlap check: [`ShapeSpec::convex`] for the convex
+    /// shapes, the polygon of an outline, and the outer boundary loop of a gmsh mesh (holes are
+    /// ignored); `None` for an annulus sector (not checked).
+    pub fn particle(&self) -> Option<crate::packing::overlap::Particle> {
+        use crate::packing::overlap::Particle;
+        match self {
+            ShapeSpec::Outline { vertices } => Some(Particle::Simple(vertices.clone())),
+            ShapeSpec::Gmsh { mesh, .. } => {
+                let outer = mesh
+                    .boundary_loops()
+                    .into_iter()
+                    .map(|l| l.iter().map(|&i| mesh.nodes[i]).collect::<Vec<_>>())
+                    .max_by(|a, b| crate::mesh::polygon_area(a.iter().copied()).total_cmp(&crate::mesh::polygon_area(b.iter().copied())))?;
+                Some(Particle::Simple(outer))
+            }
+            _ => self.convex().map(Particle::Convex),
+        }
+    }
+
+    /// Centre for radial displacements (disc, ellipse, annulus sector); `None` otherwise.
+    pub fn center(&self) -> Option<[f64; 2]> {
+        match self {
+            ShapeSpec::Disc { center, .. }
+            | ShapeSpec::Ellipse { center, .. }
+            | ShapeSpec::AnnulusSector { center, .. } => Some(*center),
+            _ => None,
+        }
+    }
+}
+
+/// Prescribed displacements on an edge set (mm, times the amplitude).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DirichletSpec {
+    /// Index into [`Case::bodies`].
+    pub body: usize,
+    pub set: String,
+    pub ux: Option<f64>,
+    pub uy: Option<f64>,
+    /// Radial displacement about the shape's [`ShapeSpec::center`].
+    pub radial: Option<f64>,
+    pub amplitude: Amplitude,
+}
+
+/// A load on an edge set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadSpec {
+    /// Index into [`Case::bodies`].
+    pub body: usize,
+    pub set: String,
+    pub kind: LoadKind,
+    pub amplitude: Amplitude,
+}
+
+/// Extra columns of `history.csv`: `(body index, edge set name)`, and how often the field
+/// results (`results.h5` / `results.xdmf`) are written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputSpec {
+    /// Reaction force columns `rx_BODY_SET`, `ry_BODY_SET`.
+    pub reactions: Vec<(usize, String)>,
+    /// Mean displacement columns `ux_BODY_SET`, `uy_BODY_SET`.
+    pub displacements: Vec<(usize, String)>,
+    /// Write the field results every `every` converged steps (and always the last one);
+    /// 0 writes no field results. Default 1.
+    pub every: usize,
+    /// Write a restart checkpoint (`checkpoint.h5`) every `checkpoint_every` converged steps;
+    /// 0 (the default): not by step count.
+    pub checkpoint_every: usize,
+    /// Write a restart checkpoint when this much wall-clock time (minutes) has passed since the
+    /// last one (or the start); 0: not by time. Default 30.
+    pub checkpoint_minutes: f64,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { reactions: Vec::new(), displacements: Vec::new(), every: 1, checkpoint_every: 0, checkpoint_minutes: 30.0 }
+    }
+}
+
+impl Case {
+    /// The linear solver to use: `[solver] linear`, with `"auto"` resolved by the symmetry of
+    /// the model's tangent ([`crate::model::symmetric_tangent`], the one place that decides it).
+    pub fn linear_kind(&self) -> LinearSolverKind {
+        let follower = self.loads.iter().any(|l| matches!(l.kind, LoadKind::Pressure(_)));
+        let contact = self.contact_params();
+        let has_contact = !self.walls.is_empty() || self.bodies.len() > 1;
+        let materials = self.bodies.iter().filter_map(|b| self.materials.get(b.material)).map(|m| &m.material);
+        let symmetric = crate::model::symmetric_tangent(materials, follower, has_contact.then_some((&contact, self.bodies.len())));
+        self.solver.linear.resolve(symmetric)
+    }
+
+    /// Index of the body called `name`.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Index of the material called `name`.
+    pub fn material_index(&self, name: &str) -> Option<usize> {
+        self.materials.iter().position(|m| m.name == name)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Entry points
+// ---------------------------------------------------------------------------------------------
+
+/// Read and validate the case file at `path` (relative paths inside are resolved against the
+/// file's directory).
+pub fn load(path: &Path) -> Result<Case, CaseError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        CaseError::new(
+            "",
+            format!("cannot read case file \"{}\": {e}", path.display()),
+        )
+    })?;
+    let base_dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    parse(&text, &base_dir)
+}
+
+/// Parse and validate case-file text; `base_dir` resolves relative paths (hardening files).
+pub fn parse(text: &str, base_dir: &Path) -> Result<Case, CaseError> {
+    let root = toml::de::DeTable::parse(text).map_err(|e| toml_error(text, None, &e))?;
+    let loc = Locator::new(text, root.get_ref());
+    let raw: raw::Case = toml::from_str(text).map_err(|e| toml_error(text, Some(&loc), &e))?;
+    let cx = Cx {
+        loc: &loc,
+        base_dir,
+        msh_cache: Default::default(),
+    };
+    cx.case(raw)
+}
+
+/// The built-in default job ([`DEFAULT_JOB`]); its validity is checked by a test.
+pub fn default_case() -> Case {
+    match parse(DEFAULT_JOB, Path::new(".")) {
+        Ok(c) => c,
+        Err(e) => panic!("the built-in default job is invalid: {e}"),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Raw serde structs (one-to-one with the file)
+// ---------------------------------------------------------------------------------------------

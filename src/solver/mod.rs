@@ -1,0 +1,464 @@
+//! The solution of a model in time: the state it acts on, the time-stepping loop, and the
+//! Newton solve of each step, in the paper's terms (full or modified Newton–Raphson, eq. 9 /
+//! 16; adaptive time steps; the augmented-Lagrangian loop that enforces incompressibility
+//! element by element for ν = 0.5).
+//!
+//! Lifecycle of a step t_n → t_{n+1} = t_n + Δt ([`Simulation::advance`], `stepping`):
+//! 1. the contact pairs are selected on the converged configuration and frozen for the step,
+//!    the stabilisation springs anchored; prescribed displacements, walls and loads are
+//!    evaluated at t_{n+1} ([`crate::loading`]); free displacements are predicted by
+//!    extrapolating the last converged increment;
+//! 2. Newton iterations `K Δu = F_ext − F_int` (`newton`) until ‖R‖ ≤ tol_R · reference force
+//!    and |Δu·R| ≤ tol_E · |Δu₀·R₀|, each residual and tangent formed by the one assembler from
+//!    every force term ([`Simulation::evaluate`], `system`); material states are evaluated from
+//!    the committed ones and never changed inside the iterations;
+//! 3. for incompressible bodies the multipliers are updated (λ_e ← p_e), for the augmented
+//!    Lagrangian contact the pair multipliers, and step 2 repeats until max |Θ_e − 1| ≤
+//!    `volume_tol` and the contact violation is within its tolerance;
+//! 4. on success the states are committed and the step may grow; on failure (no convergence,
+//!    inverted element, failed return map, failed linear solve) everything of the step is
+//!    discarded and it is retried with Δt · cutback, down to `dt_min` (after a retry with
+//!    every dof stabilised or the springs viscous, and a re-mesh of a poor particle, when
+//!    asked for).
+//!
+//! The modules: `params` (the case's `[time]` and `[solver]`), `state` (the solution and the
+//! run's counters, and what a checkpoint keeps), `report` (step reports, run summary, phase
+//! timers), `system` (the global system and the evaluation of every term), `newton` (Newton,
+//! line search, the multiplier loops, the predictor, the release of an imbalance), `stepping`
+//! (the time loop, cut-back, commit), `remeshing` (re-meshing a running simulation).
+
+mod newton;
+mod params;
+mod remeshing;
+mod report;
+mod state;
+mod stepping;
+mod system;
+
+pub use params::{NewtonKind, SolverSpec, TimeSpec};
+pub use report::{Clock, Compaction, Phase, PhaseScope, RunSummary, StepReport, Timing};
+pub use state::{PartitionTotals, SimScalars, SimState, Solution};
+
+use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
+use crate::comm::{Collective, Serial};
+use crate::contact::{ContactEvals, ContactProblem, ContactStats};
+use crate::dynamics::Dynamics;
+use crate::linalg::{make_solver_with, LinalgError, LinearSolverKind, SolverOptions};
+use crate::material::ConstitutiveLaw;
+use crate::model::Model;
+use crate::parallel::{Distribution, PartitionStats};
+use crate::stabilise::Springs;
+use state::RunState;
+use std::sync::Arc;
+use system::{System, TermMaps};
+use thiserror::Error;
+
+/// Why one Newton solve failed (drives the cut-back).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum NewtonFailure {
+    #[error("no convergence in {iterations} iterations (residual history {residuals:?})")]
+    NotConverged { iterations: usize, residuals: Vec<f64> },
+    #[error("diverged at iteration {iteration} (residual history {residuals:?})")]
+    Diverged { iteration: usize, residuals: Vec<f64> },
+    #[error("{0}")]
+    Element(#[from] AssemblyError),
+    #[error("linear solver: {0}")]
+    Linear(String),
+}
+
+/// A run that could not go on.
+#[derive(Debug, Error)]
+pub enum SolveError {
+    #[error("step from t = {time:.6e} s failed with dt = {dt:.3e} s (below dt_min = {dt_min:.3e} s): {cause}")]
+    StepFailed { time: f64, dt: f64, dt_min: f64, cause: NewtonFailure },
+    #[error("maximum number of steps ({0}) reached before the end time")]
+    TooManySteps(usize),
+    #[error("linear solver setup: {0}")]
+    Linear(#[from] LinalgError),
+    #[error("re-meshing body {body}: {reason}")]
+    Remesh { body: usize, reason: String },
+}
+
+/// A converged but uncommitted step.
+struct Trial {
+    u: Vec<f64>,
+    lambda: Vec<f64>,
+    worst: f64,
+    iterations: usize,
+    updates: usize,
+    residual: f64,
+}
+
+/// The simulation of a model: its solution and run state, the global system, and the force
+/// terms besides the elements (contact, stabilisation springs, inertia).
+pub struct Simulation {
+    pub model: Model,
+    pub time: TimeSpec,
+    pub spec: SolverSpec,
+    /// The committed solution.
+    pub sol: Solution,
+    /// Counters, energies and the step-size control between steps.
+    run: RunState,
+    /// The global system: assembler, pattern, matrix, vectors, linear solver, processes.
+    sys: System,
+    /// Volumetric data per element: the bulk modulus κ (or the augmented-Lagrangian penalty of
+    /// an incompressible body) and whether the element's body is incompressible.
+    kappa: Vec<f64>,
+    incompressible: Vec<bool>,
+    /// Contact with walls and between bodies (None: nothing can touch), the statistics of its
+    /// last evaluation and the buffer of its evaluations.
+    pub contact: Option<ContactProblem>,
+    contact_stats: ContactStats,
+    contact_evals: ContactEvals,
+    /// The stabilisation springs of a contact problem.
+    springs: Springs,
+    /// Newmark / HHT-α state of an implicit dynamic analysis (None: quasi-static).
+    dynamics: Option<Dynamics>,
+    /// Wall time per phase.
+    clock: Clock,
+}
+
+impl Simulation {
+    /// Build the driver. `threads` = 0 uses every core; 1 assembles sequentially.
+    pub fn new(model: Model, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
+        Self::new_with(model, time, spec, Arc::new(Serial))
+    }
+
+    /// As [`Simulation::new`], on the processes of `comm`: every process builds the same
+    /// model and calls this; each assembles the elements of the particles it owns, rank 0
+    /// solves the linear systems (see [`crate::parallel`]). With one process this is
+    /// [`Simulation::new`].
+    pub fn new_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>) -> Result<Self, SolveError> {
+        Self::build(model, time, spec, comm, None)
+    }
+
+    /// [`Simulation::new_with`]; with `previous` (the owners of the bodies in the simulation
+    /// this one replaces, when any process owned them, and its partition figures) the owners
+    /// are kept unless their imbalance on the new model is above `[solver]
+    /// repartition_imbalance` (see [`Distribution::build`]).
+    fn build(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>) -> Result<Self, SolveError> {
+        let mut partition = previous.map_or_else(PartitionStats::default, |p| p.1.clone());
+        let par = Distribution::build(&model, comm.clone(), previous.and_then(|p| p.0), spec.repartition_imbalance, &mut partition);
+        let n_dofs = model.n_dofs();
+        let (eq, n_free) = number_equations(n_dofs, model.loading.prescribed.iter().map(|p| p.dof));
+        let mut contact = model.contact_problem();
+        let (mut assembler, mut kk) = Assembler::new(&model, eq, n_free);
+        let (mut pair_dofs, mut multiplier_dofs, mut node_dofs) = (Vec::new(), Vec::new(), Vec::new());
+        if let Some(c) = contact.as_mut() {
+            c.select_pairs(&model.x0, &model.wall_planes(0.0));
+            (pair_dofs, multiplier_dofs, node_dofs) = (c.pair_dof_lists(), c.multiplier_dofs(), c.node_dof_lists());
+            assembler.set_terms(&mut kk, &pair_dofs, &multiplier_dofs);
+        }
+        if let Some(p) = &par {
+            assembler.retain_elements(&p.owned_elements);
+        }
+        let maps = TermMaps { pairs: assembler.block_map(&kk, &pair_dofs), multipliers: assembler.multiplier_map(&kk, &multiplier_dofs), ..Default::default() };
+        // stabilisation springs ζ E a / h² on every dof of a contact problem
+        let body_e: Vec<f64> = model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).collect();
+        let body_h: Vec<f64> = model.bodies.iter().map(|b| b.contact_h).collect();
+        let body_nodes: Vec<_> = model.bodies.iter().map(|b| b.node_offset..b.node_offset + b.mesh.nodes.len()).collect();
+        let springs = Springs::new(&model.x0, &model.elements, &model.elem_body, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some());
+        let n_walls = model.loading.walls.len();
+        let symmetric = model.symmetric_tangent();
+        let kind = spec.linear.resolve(symmetric);
+        let threads = if spec.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { spec.threads };
+        let pool = if threads > 1 {
+            Some(rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| LinalgError::Other(format!("cannot start {threads} threads: {e}")))?)
+        } else {
+            None
+        };
+        let opts = SolverOptions { kind, preconditioner: spec.preconditioner, pcg_tol: spec.pcg_tol, pcg_max_iterations: spec.pcg_max_iterations, threads, ordering: spec.ordering, symmetric };
+        // the particles are the subdomains of the Schwarz preconditioner, distributed like the
+        // elements; with it every process takes part in the solve, otherwise rank 0 alone solves
+        let schwarz = kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
+        let distributed_solve = par.is_some() && schwarz;
+        let mut subdomains = crate::linalg::schwarz::Subdomains::default();
+        if schwarz {
+            let eq = &assembler.eq;
+            subdomains = crate::linalg::schwarz::Subdomains::from_particles(&body_nodes, &model.x0, |d| (eq[d] != FIXED).then_some(eq[d]));
+            if let Some(p) = &par {
+                subdomains = subdomains.with_owners(&p.body_owner, comm.rank());
+            }
+        }
+        let mut linear = make_solver_with(&opts, subdomains, comm.clone());
+        // (a failure on the solving process fails every process)
+        let analyzed = if n_free > 0 && (comm.is_root() || distributed_solve) { linear.analyze(&kk) } else { Ok(()) };
+        if par.is_some() && comm.max(if analyzed.is_err() { 1.0 } else { 0.0 }) > 0.0 {
+            analyzed?;
+            return Err(LinalgError::Other("symbolic analysis failed on rank 0".into()).into());
+        }
+        analyzed?;
+        let linear_name = linear.name().to_string();
+        let ne = model.elements.len();
+        let mut kappa = vec![0.0; ne];
+        let mut incompressible = vec![false; ne];
+        let mut g_max: f64 = 0.0;
+        for e in 0..ne {
+            let m = &model.materials[model.elem_material[e]];
+            g_max = g_max.max(m.shear_modulus());
+            match m.bulk_modulus() {
+                Some(k) => kappa[e] = k,
+                None => {
+                    kappa[e] = spec.incompressible_penalty * m.shear_modulus();
+                    incompressible[e] = true;
+                }
+            }
+        }
+        let area0_body = model.body_areas(&model.x0);
+        let area0_total: f64 = area0_body.iter().sum();
+        // forces below this are round-off: G · L · 1e-13 with L = √(total area)
+        let force_floor = 1e-13 * g_max * area0_total.abs().sqrt();
+        let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne], j0: vec![1.0; ne] };
+        let dynamics = Dynamics::from_model(time.integrator, &model);
+        let n_rows = kk.nrows;
+        let mut sys = System {
+            assembler,
+            kk,
+            maps,
+            r: vec![0.0; n_rows],
+            du: vec![0.0; n_rows],
+            f_int: vec![0.0; n_dofs],
+            f_ext: vec![0.0; n_dofs],
+            f_elem_norm: 0.0,
+            trial_fields: ElementFields::new(ne),
+            eq_offset: Vec::new(),
+            linear,
+            linear_name,
+            pool,
+            comm,
+            par,
+            partition,
+            distributed_solve,
+        };
+        sys.locate_fixed_terms(&model, &node_dofs);
+        let run = RunState {
+            step: 0,
+            dt_prev: 0.0,
+            next_dt: time.dt.min(time.dt_max),
+            total_iterations: 0,
+            total_cutbacks: 0,
+            total_remeshes: 0,
+            u_prev: vec![0.0; n_dofs],
+            area0_body,
+            area0_total,
+            force_floor,
+            work_ext: 0.0,
+            last_wall_force: vec![0.0; n_walls],
+            remesh_baseline: vec![None; model.bodies.len()],
+            last_report: None,
+        };
+        let mut sim = Self {
+            model,
+            time,
+            spec,
+            sol,
+            run,
+            sys,
+            kappa,
+            incompressible,
+            contact,
+            contact_stats: ContactStats::default(),
+            contact_evals: ContactEvals::default(),
+            springs,
+            dynamics,
+            clock: Clock::default(),
+        };
+        sim.start_dynamics()?;
+        Ok(sim)
+    }
+
+    /// Initial state of an implicit dynamic analysis (nothing when quasi-static): v_0 = 0 and
+    /// the acceleration consistent with F_ext(t_0) − F_int(u_0), see [`Dynamics::start`].
+    fn start_dynamics(&mut self) -> Result<(), SolveError> {
+        let Some(mut dy) = self.dynamics.take() else { return Ok(()) };
+        let u0 = self.sol.u.clone();
+        let vol = self.volumetric(&self.sol.lambda);
+        let inc = crate::material::TimeIncrement { time: self.sol.time, dt: self.time.dt };
+        self.evaluate(&u0, inc, &vol, false).map_err(|e| SolveError::StepFailed { time: self.sol.time, dt: 0.0, dt_min: self.time.dt_min, cause: e.into() })?;
+        dy.start(&u0, &self.sys.f_int, &self.sys.f_ext, &self.sys.assembler.eq);
+        self.dynamics = Some(dy);
+        Ok(())
+    }
+
+    /// The state between two steps (after a converged step, or before the first), for a
+    /// checkpoint: with the same model, [`Simulation::set_state`] on a new simulation continues
+    /// the run bit for bit.
+    pub fn state(&self) -> SimState {
+        SimState {
+            scalars: SimScalars {
+                time: self.sol.time,
+                step: self.run.step,
+                dt_prev: self.run.dt_prev,
+                next_dt: self.run.next_dt,
+                total_iterations: self.run.total_iterations,
+                total_cutbacks: self.run.total_cutbacks,
+                total_remeshes: self.run.total_remeshes,
+                stab_all: self.springs.all,
+                stab_viscous: self.springs.viscous,
+                stab_energy: self.springs.energy,
+                work_ext: self.run.work_ext,
+                last_wall_force: self.run.last_wall_force.clone(),
+                area0_body: self.run.area0_body.clone(),
+                area0_total: self.run.area0_total,
+                force_floor: self.run.force_floor,
+                timing: self.clock.timing(),
+                remesh_baseline: self.run.remesh_baseline.clone(),
+                last_report: self.run.last_report.clone(),
+                contact: self.contact.as_ref().map(|c| c.state()),
+                partition: PartitionTotals { repartitions: self.sys.partition.repartitions, kept: self.sys.partition.kept, moved: self.sys.partition.moved, time_s: self.sys.partition.time_s },
+            },
+            sol: self.sol.clone(),
+            u_prev: self.run.u_prev.clone(),
+            dynamics: self.dynamics.as_ref().map(|d| [d.u.clone(), d.v.clone(), d.a.clone(), d.g.clone()]),
+        }
+    }
+
+    /// Continue from `state` ([`Simulation::state`] of a simulation of the same model, e.g.
+    /// read from a checkpoint).
+    ///
+    /// # Errors
+    /// A message naming what does not fit this simulation's model (sizes of the arrays,
+    /// bodies, walls, contact, dynamics).
+    pub fn set_state(&mut self, state: SimState) -> Result<(), String> {
+        let SimState { scalars: s, sol, u_prev, dynamics } = state;
+        let (n_dofs, ne, nb) = (self.model.n_dofs(), self.model.elements.len(), self.model.bodies.len());
+        let check = |what: &str, got: usize, want: usize| if got == want { Ok(()) } else { Err(format!("{what}: {got} in the checkpoint, {want} in the model")) };
+        check("displacement dofs", sol.u.len(), n_dofs)?;
+        check("previous displacement dofs", u_prev.len(), n_dofs)?;
+        check("element multipliers", sol.lambda.len(), ne)?;
+        check("element initial volume ratios", sol.j0.len(), ne)?;
+        check("element material states", sol.fields.states.len(), ne)?;
+        check("element stresses", sol.fields.sig.len(), ne)?;
+        check("element pressures", sol.fields.pressure.len(), ne)?;
+        check("element volume ratios", sol.fields.theta.len(), ne)?;
+        check("element enhanced modes", sol.fields.alpha.len(), ne)?;
+        check("body areas", s.area0_body.len(), nb)?;
+        check("re-mesh baselines", s.remesh_baseline.len(), nb)?;
+        check("wall forces", s.last_wall_force.len(), self.run.last_wall_force.len())?;
+        match (self.contact.as_mut(), s.contact) {
+            (Some(c), Some(cs)) => c.set_state(cs)?,
+            (None, None) => {}
+            (have, _) => return Err(format!("contact: the model {} contact, the checkpoint {}", if have.is_some() { "has" } else { "has no" }, if have.is_some() { "has none" } else { "has" })),
+        }
+        match (self.dynamics.as_mut(), dynamics) {
+            (Some(d), Some([u, v, a, g])) => {
+                for (what, x) in [("dynamic displacements", &u), ("velocities", &v), ("accelerations", &a), ("dynamic forces", &g)] {
+                    check(what, x.len(), d.u.len())?;
+                }
+                (d.u, d.v, d.a, d.g) = (u, v, a, g);
+            }
+            (None, None) => {}
+            (have, _) => return Err(format!("the analysis is {} but the checkpoint's is not", if have.is_some() { "dynamic" } else { "quasi-static" })),
+        }
+        self.sol = sol;
+        self.sol.time = s.time;
+        self.run.u_prev = u_prev;
+        self.run.step = s.step;
+        self.run.dt_prev = s.dt_prev;
+        self.run.next_dt = s.next_dt;
+        self.run.total_iterations = s.total_iterations;
+        self.run.total_cutbacks = s.total_cutbacks;
+        self.run.total_remeshes = s.total_remeshes;
+        self.springs.all = s.stab_all;
+        self.springs.viscous = s.stab_viscous;
+        self.springs.energy = s.stab_energy;
+        self.run.work_ext = s.work_ext;
+        self.run.last_wall_force = s.last_wall_force;
+        self.run.area0_body = s.area0_body;
+        self.run.area0_total = s.area0_total;
+        self.run.force_floor = s.force_floor;
+        self.clock.set(s.timing);
+        self.run.remesh_baseline = s.remesh_baseline;
+        self.run.last_report = s.last_report;
+        // the run's counts so far; the current partition (on this run's processes) is this one's
+        self.sys.partition.repartitions = s.partition.repartitions;
+        self.sys.partition.kept = s.partition.kept;
+        self.sys.partition.moved = s.partition.moved;
+        self.sys.partition.time_s += s.partition.time_s;
+        Ok(())
+    }
+
+    /// The step counter (converged steps so far).
+    pub fn step(&self) -> usize {
+        self.run.step
+    }
+
+    /// The report of the last converged step of [`Simulation::run`] (kept in a checkpoint).
+    pub fn last_report(&self) -> Option<&StepReport> {
+        self.run.last_report.as_ref()
+    }
+
+    /// The stabilisation spring of every dof when it acts, ζ E a / h² (N/mm², before the
+    /// `stiffen_on_cutback` factor; zero without contact): h is the particle's
+    /// [`crate::model::Body::contact_h`], so a re-mesh does not change a particle's total.
+    pub fn stabilisation_springs(&self) -> &[f64] {
+        &self.springs.base
+    }
+
+    pub fn n_free(&self) -> usize {
+        self.sys.assembler.n_free
+    }
+
+    /// Whether every process takes part in the linear solves (the Schwarz PCG on several
+    /// processes) rather than rank 0 alone.
+    pub fn solves_distributed(&self) -> bool {
+        self.sys.distributed_solve
+    }
+
+    /// The partition of the bodies over the processes: ranks, imbalance, edge cut and the
+    /// repartitions so far (one process: 1, 1, 0, 0).
+    pub fn partition(&self) -> &PartitionStats {
+        &self.sys.partition
+    }
+
+    pub fn linear_solver_name(&self) -> &str {
+        &self.sys.linear_name
+    }
+
+    /// Nodal velocities of the last committed step (mm/s, dof `2 n + c`): the Newmark
+    /// velocity with inertia, otherwise the step's mean velocity (u_n − u_{n−1})/Δt (zero
+    /// before the first step).
+    pub fn velocity(&self) -> Vec<f64> {
+        if let Some(dy) = self.dynamics.as_ref() {
+            return dy.v.clone();
+        }
+        if self.run.step == 0 || !(self.run.dt_prev > 0.0) {
+            return vec![0.0; self.sol.u.len()];
+        }
+        self.sol.u.iter().zip(&self.run.u_prev).map(|(a, b)| (a - b) / self.run.dt_prev).collect()
+    }
+
+    /// Solid ratio of the initial configuration (particle area / die area at t = 0), when four
+    /// walls close a die.
+    pub fn initial_solid_ratio(&self) -> Option<f64> {
+        self.contact.as_ref()?;
+        let [x0, x1, y0, y1] = self.model.loading.die(0.0)?;
+        let die = (x1 - x0) * (y1 - y0);
+        (die > 0.0).then(|| self.run.area0_total / die)
+    }
+
+    /// Contact state per node of the last committed step (None without contact).
+    pub fn nodal_contact(&self) -> Option<&crate::contact::NodalContact> {
+        self.contact.as_ref().map(|c| &c.nodal)
+    }
+
+    /// Current nodal coordinates x = X + u.
+    pub fn coords(&self, u: &[f64]) -> Vec<[f64; 2]> {
+        self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + u[2 * n], p[1] + u[2 * n + 1]]).collect()
+    }
+
+    /// Reaction on node `n` after the last converged step: F_int − F_ext (N/mm).
+    pub fn nodal_reaction(&self, n: usize) -> [f64; 2] {
+        [self.sys.f_int[2 * n] - self.sys.f_ext[2 * n], self.sys.f_int[2 * n + 1] - self.sys.f_ext[2 * n + 1]]
+    }
+
+    /// Wall time per phase so far.
+    pub fn timing(&self) -> Timing {
+        self.clock.timing()
+    }
+
+    /// The run's phase timers (a caller may time its own phases, e.g. the output).
+    pub fn clock(&self) -> &Clock {
+        &self.clock
+    }
+}

@@ -1,0 +1,340 @@
+//! The time-stepping loop: the step size control (growth after easy steps, cut-back after a
+//! failure, down to `dt_min`), the retries before a cut-back (every dof stabilised, viscous
+//! springs, a re-mesh of a poor particle), the jam test, the predictor of a step, and the
+//! commit of a converged one with its report.
+
+use super::{Compaction, NewtonFailure, Phase, RunSummary, Simulation, SolveError, StepReport, Trial};
+use crate::assembly::FIXED;
+use crate::material::TimeIncrement;
+use crate::stabilise::{StabilisationKind, Stabilise};
+use std::ops::ControlFlow;
+use std::time::Instant;
+
+impl Simulation {
+    /// Run from the current time to the end time, calling `observer` after every converged
+    /// step. On error the last committed solution stays in `self.sol`.
+    pub fn run(&mut self, observer: &mut dyn FnMut(&Simulation, &StepReport)) -> Result<RunSummary, SolveError> {
+        self.run_controlled(&mut |s, r| {
+            observer(s, r);
+            ControlFlow::Continue(())
+        })
+    }
+
+    /// [`Simulation::run`] with an observer that may stop the run after the step it is shown
+    /// (`ControlFlow::Break(reason)`: the summary's `stop_reason`, `interrupted` set). The
+    /// observer sees the simulation in a state that continues bit for bit (the step size of the
+    /// next step included), so it can write a checkpoint ([`crate::checkpoint`]).
+    pub fn run_controlled(&mut self, observer: &mut dyn FnMut(&Simulation, &StepReport) -> ControlFlow<String>) -> Result<RunSummary, SolveError> {
+        let start = Instant::now();
+        let t_end = self.time.end;
+        let mut stop_reason = "end time".to_string();
+        let mut interrupted = false;
+        while self.sol.time < t_end * (1.0 - 1e-12) {
+            if self.run.step >= self.time.max_steps {
+                return Err(SolveError::TooManySteps(self.time.max_steps));
+            }
+            let dt = self.run.next_dt;
+            let remaining = t_end - self.sol.time;
+            let dt_try = if remaining <= dt * 1.01 { remaining } else { dt };
+            let report = match self.advance(dt_try) {
+                Ok(r) => r,
+                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && self.is_jammed(self.run.last_report.as_ref()) => {
+                    tracing::warn!(time, dt, %cause, "the walls cannot advance any more: jammed");
+                    stop_reason = "jammed".to_string();
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+            self.run.next_dt = if report.cutbacks == 0 && report.newton_iterations <= self.time.easy_iterations {
+                (report.dt * self.time.growth).min(self.time.dt_max)
+            } else {
+                report.dt
+            };
+            self.run.last_report = Some(report.clone());
+            let flow = observer(self, &report);
+            let reached = match (&report.compaction, self.model.stop.solid_ratio) {
+                (Some(c), Some(target)) => c.solid_ratio >= target,
+                _ => false,
+            };
+            if reached {
+                stop_reason = "solid ratio reached".to_string();
+                break;
+            }
+            if let ControlFlow::Break(reason) = flow {
+                stop_reason = reason;
+                interrupted = true;
+                break;
+            }
+        }
+        Ok(RunSummary {
+            steps: self.run.step,
+            newton_iterations: self.run.total_iterations,
+            cutbacks: self.run.total_cutbacks,
+            remeshes: self.run.total_remeshes,
+            final_time: self.sol.time,
+            wall_time_s: start.elapsed().as_secs_f64(),
+            linear_solver: self.sys.linear_name.clone(),
+            n_dofs: self.model.n_dofs(),
+            n_free: self.sys.assembler.n_free,
+            n_elements: self.model.elements.len(),
+            last: self.run.last_report.clone(),
+            stop_reason,
+            interrupted,
+            timing: self.clock.timing(),
+            partition: self.sys.partition.clone(),
+        })
+    }
+
+    /// A failed step counts as a jam (the walls cannot advance any more) only when the last
+    /// converged state is dense (solid ratio ≥ `[stop] jam_solid_ratio`, 0.9 by default) and
+    /// every moving wall carries load;
+    /// otherwise the failure is a convergence failure and is reported as an error.
+    fn is_jammed(&self, last: Option<&StepReport>) -> bool {
+        let Some(c) = last.and_then(|r| r.compaction.as_ref()) else { return false };
+        let walls = &self.model.loading;
+        let moving_loaded = walls.walls.iter().enumerate().all(|(w, wall)| !walls.wall_moves(w) || c.force[wall.side.index()] > 0.0);
+        !walls.walls.is_empty() && c.solid_ratio >= self.model.stop.jam_solid_ratio && moving_loaded
+    }
+
+    /// One converged step of size `dt`, or smaller after cut-backs (the report says which).
+    pub fn advance(&mut self, dt: f64) -> Result<StepReport, SolveError> {
+        let mut dt_try = dt;
+        let mut cutbacks = 0;
+        let mut snapshot = self.contact.as_ref().map(|c| c.snapshot());
+        // particles re-meshed in this step: the retry after an inverted element (once per
+        // step), then those whose mesh crosses the quality limits after the step
+        let mut remeshes = 0;
+        let mut remesh_tried = false;
+        loop {
+            if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
+                c.restore(snap.clone());
+            }
+            let result = self.try_step(dt_try);
+            let stab = &self.model.stabilisation;
+            let stabilised = self.contact.is_some() && stab.factor > 0.0;
+            let partial = stabilised && !self.springs.all && stab.scope == Stabilise::Unsupported;
+            let inertial = stabilised && !self.springs.viscous && stab.viscous_retry && stab.kind == StabilisationKind::Inertial;
+            let inverted = match &result {
+                Err(NewtonFailure::Element(e)) if self.model.remesh.enabled && !remesh_tried => self.model.elem_body.get(e.element).copied(),
+                _ => None,
+            };
+            if let Some(b) = inverted {
+                // an element inverted: re-mesh its particle (in the last converged state) and
+                // retry the same step before any cut-back, when its mesh there is already
+                // poor (a new mesh of a good mesh does not help: the step was too large)
+                remesh_tried = true;
+                if self.model.remesh_constraint(b).is_none() && self.mesh_is_poor(b) {
+                    tracing::info!(time = self.sol.time, dt = dt_try, body = b, "an element inverted: re-meshing the particle and retrying the step");
+                    if self.remesh_and_rebalance(b) {
+                        remeshes += 1;
+                        snapshot = self.contact.as_ref().map(|c| c.snapshot());
+                        continue;
+                    }
+                }
+            }
+            match result {
+                Ok(trial) => {
+                    self.springs.all = false;
+                    self.springs.viscous = false;
+                    let mut report = self.commit(dt_try, trial, cutbacks);
+                    remeshes += self.remesh_after_step();
+                    report.remeshes = remeshes;
+                    return Ok(report);
+                }
+                Err(cause) if partial => {
+                    // retry the same step with every dof stabilised before cutting back
+                    tracing::debug!(time = self.sol.time, dt = dt_try, %cause, "step failed with partial stabilisation, retrying with all");
+                    self.springs.all = true;
+                    cutbacks += 1;
+                    self.run.total_cutbacks += 1;
+                }
+                Err(cause) if inertial => {
+                    // retry the same step with the springs anchored where the step starts: a
+                    // particle that hits another at rest must change its velocity at once, which
+                    // the inertial anchor resists and the viscous one does not
+                    tracing::debug!(time = self.sol.time, dt = dt_try, %cause, "step failed with inertial stabilisation, retrying viscous");
+                    self.springs.viscous = true;
+                    cutbacks += 1;
+                    self.run.total_cutbacks += 1;
+                }
+                Err(cause) => {
+                    // (a retry's wider or viscous springs stay on for the cut-back steps)
+                    cutbacks += 1;
+                    self.run.total_cutbacks += 1;
+                    let next = dt_try * self.time.cutback;
+                    tracing::warn!(time = self.sol.time, dt = dt_try, next, %cause, "step failed, cutting back");
+                    if next < self.time.dt_min {
+                        return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause });
+                    }
+                    dt_try = next;
+                }
+            }
+        }
+    }
+
+    /// Contact pairs for a solve that ends at `sol.time + dt` (frozen during its Newton
+    /// iterations; the pattern follows when they change), where the stabilisation springs
+    /// are anchored and how stiff they are. `dt = 0` is a re-equilibration in place: the springs
+    /// are then anchored at the last converged position.
+    pub(super) fn prepare_contact(&mut self, dt: f64) -> Result<(), NewtonFailure> {
+        let _t = self.clock.scope(Phase::ContactSearch);
+        let Some(c) = self.contact.as_mut() else { return Ok(()) };
+        let x_n = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + self.sol.u[2 * n], p[1] + self.sol.u[2 * n + 1]]).collect::<Vec<_>>();
+        c.wall_reach = self.model.loading.wall_reach(self.sol.time, dt);
+        let walls_n = self.model.wall_planes(self.sol.time);
+        if c.select_pairs(&x_n, &walls_n) {
+            // the pattern follows the pairs (incrementally); the positions of the pair and
+            // multiplier blocks follow them in any case
+            let sys = &mut self.sys;
+            let (pair_dofs, multiplier_dofs) = (c.pair_dof_lists(), c.multiplier_dofs());
+            let changed = sys.assembler.set_terms(&mut sys.kk, &pair_dofs, &multiplier_dofs);
+            sys.maps.pairs = sys.assembler.block_map(&sys.kk, &pair_dofs);
+            sys.maps.multipliers = sys.assembler.multiplier_map(&sys.kk, &multiplier_dofs);
+            if changed {
+                sys.r.resize(sys.kk.nrows, 0.0);
+                sys.du.resize(sys.kk.nrows, 0.0);
+                sys.locate_fixed_terms(&self.model, &c.node_dof_lists());
+                sys.analyze()?;
+            }
+        }
+        // the springs of this step: every dof, or only the directions the contacts of the last
+        // converged state do not hold
+        let n_bodies = self.model.bodies.len();
+        let held = || c.body_support(&x_n, &walls_n, n_bodies);
+        self.springs.prepare(&self.model.stabilisation, &self.sol.u, &self.run.u_prev, dt, self.run.dt_prev, self.time.dt, held);
+        Ok(())
+    }
+
+    /// Attempt one step of size dt from the committed solution. On success the trial
+    /// displacement is in `self.sol.u` (not yet committed) — see `commit`.
+    pub(super) fn try_step(&mut self, dt: f64) -> Result<Trial, NewtonFailure> {
+        let t = self.sol.time + dt;
+        let inc = TimeIncrement { time: t, dt };
+        self.prepare_contact(dt)?;
+        // prediction
+        let mut u = self.sol.u.clone();
+        if self.run.dt_prev > 0.0 {
+            let s = dt / self.run.dt_prev;
+            for (d, &q) in self.sys.assembler.eq.iter().enumerate() {
+                if q != FIXED {
+                    u[d] += s * (self.sol.u[d] - self.run.u_prev[d]);
+                }
+            }
+        }
+        self.model.loading.apply_prescribed(&mut u, t);
+        if let Some(dy) = self.dynamics.as_ref() {
+            dy.predict(&mut u, dt, &self.sys.assembler.eq); // Newmark predictor (a_{n+1} = 0)
+        }
+        if self.run.dt_prev == 0.0 && self.dynamics.is_none() {
+            // no increment to extrapolate (first step): linearised prediction instead
+            if let Err(e) = self.tangent_predictor(&mut u, inc) {
+                tracing::debug!(%e, "tangent predictor skipped");
+                u.copy_from_slice(&self.sol.u);
+                self.model.loading.apply_prescribed(&mut u, t);
+            }
+        }
+        let restart = self.run.dt_prev > 0.0;
+        self.solve_from(u, inc, restart)
+    }
+
+    /// Commit a converged step: states, displacements, multipliers, time; build its report.
+    pub(super) fn commit(&mut self, dt: f64, trial: Trial, cutbacks: usize) -> StepReport {
+        // work done against the stabilisation springs over the step (their force at the end of
+        // the step times the increment)
+        self.springs.energy += self.springs.work(&trial.u, &self.sol.u);
+        if let Some(c) = self.contact.as_mut() {
+            c.commit();
+        }
+        self.run.u_prev.copy_from_slice(&self.sol.u);
+        self.sol.u = trial.u;
+        self.sol.lambda = trial.lambda;
+        std::mem::swap(&mut self.sol.fields, &mut self.sys.trial_fields);
+        if let Some(dy) = self.dynamics.as_mut() {
+            dy.commit(&self.sol.u, dt, &self.sys.f_int, &self.sys.f_ext);
+        }
+        self.sol.time += dt;
+        self.run.dt_prev = dt;
+        self.run.step += 1;
+        self.run.total_iterations += trial.iterations;
+        let x = self.coords(&self.sol.u);
+        let areas = self.model.body_areas(&x);
+        let total: f64 = areas.iter().sum();
+        let volume_error = ((total - self.run.area0_total) / self.run.area0_total).abs();
+        let volume_error_max_body = areas
+            .iter()
+            .zip(&self.run.area0_body)
+            .map(|(a, a0)| ((a - a0) / a0).abs())
+            .fold(0.0, f64::max);
+        let reactions = self
+            .model
+            .reaction_groups
+            .iter()
+            .map(|g| {
+                let mut r = [0.0; 2];
+                for &n in &g.nodes {
+                    for c in 0..2 {
+                        r[c] += self.sys.f_int[2 * n + c] - self.sys.f_ext[2 * n + c];
+                    }
+                }
+                r
+            })
+            .collect();
+        let displacements = self
+            .model
+            .displacement_groups
+            .iter()
+            .map(|g| {
+                let mut m = [0.0; 2];
+                for &n in &g.nodes {
+                    for c in 0..2 {
+                        m[c] += self.sol.u[2 * n + c];
+                    }
+                }
+                let k = g.nodes.len().max(1) as f64;
+                [m[0] / k, m[1] / k]
+            })
+            .collect();
+        let compaction = self.contact.as_ref().map(|c| {
+            let t = self.sol.time;
+            let mut out = Compaction {
+                max_penetration: self.contact_stats.max_penetration,
+                active_contacts: self.contact_stats.active,
+                ..Default::default()
+            };
+            let loading = &self.model.loading;
+            for (w, wall) in loading.walls.iter().enumerate() {
+                let f = self.contact_stats.wall_force.get(w).copied().unwrap_or(0.0);
+                let moved = (loading.wall_position(w, t) - loading.wall_position(w, t - dt)).abs();
+                self.run.work_ext += 0.5 * (f + self.run.last_wall_force[w]) * moved;
+                self.run.last_wall_force[w] = f;
+                let k = wall.side.index();
+                let len = loading.wall_length(w, t, c.boundary.slaves.iter().map(|&(n, _)| x[n]));
+                out.force[k] += f;
+                out.pressure[k] += if len > 0.0 { f / len } else { 0.0 };
+            }
+            if let Some([x0, x1, y0, y1]) = loading.die(t) {
+                out.solid_ratio = total / ((x1 - x0) * (y1 - y0));
+            }
+            out.stabilisation_energy = self.springs.energy;
+            out.external_work = self.run.work_ext;
+            out
+        });
+        StepReport {
+            compaction,
+            step: self.run.step,
+            time: self.sol.time,
+            dt,
+            newton_iterations: trial.iterations,
+            volume_updates: trial.updates,
+            cutbacks,
+            residual: trial.residual,
+            volume_error,
+            volume_error_max_body,
+            max_element_volume_change: trial.worst,
+            reactions,
+            displacements,
+            kinetic_energy: self.dynamics.as_ref().map_or(0.0, |dy| dy.kinetic_energy()),
+            remeshes: 0,
+        }
+    }
+}

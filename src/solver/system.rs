@@ -1,0 +1,298 @@
+//! The global system of a simulation: the one assembler and its pattern, the matrix and the
+//! vectors of a Newton iteration, the linear solver and the processes it runs on — and the one
+//! way a residual and a tangent are formed ([`Simulation::evaluate`]).
+//!
+//! Every force term is a local contribution scattered into the one pattern, in a fixed order:
+//! 1. the element kernels (colour-parallel, [`crate::assembly::Assembler::assemble`]; on several
+//!    processes each adds its own particles' elements and the sums go to every process, the
+//!    tangent to rank 0);
+//! 2. the external loads (follower pressures add their derivative through their block map);
+//! 3. the contact pairs ([`crate::contact::ContactProblem`]: node-to-segment blocks, wall
+//!    blocks, multiplier blocks), evaluated by the owners of their slave nodes and added by
+//!    every process in the serial order;
+//! 4. the stabilisation springs and their regularisation (the diagonal);
+//! 5. the inertia of an implicit dynamic analysis (the diagonal);
+//! 6. a held-back imbalance (re-equilibration) and the multiplier rows.
+//!
+//! On several processes rank 0 adds steps 2–6 to the tangent after the element sum, so every
+//! matrix entry receives its contributions in the same order as in a serial run: the runs are
+//! bit-identical to the serial one.
+
+use super::{NewtonFailure, Phase, Simulation};
+use crate::assembly::{AssemblyError, Assembler, ElementFields, FIXED};
+use crate::comm::Collective;
+use crate::contact::ContactTangent;
+use crate::element::Volumetric;
+use crate::linalg::{BlockMap, CsrMatrix, LinearSolver};
+use crate::loading::LoadKind;
+use crate::material::TimeIncrement;
+use crate::parallel::{Distribution, PartitionStats};
+use std::sync::Arc;
+
+/// The positions of the non-element terms in the current pattern.
+#[derive(Default)]
+pub(super) struct TermMaps {
+    /// One block per frozen contact pair (its dofs), per slave node (the wall pairs), per
+    /// Lagrange multiplier (its dofs and its own row).
+    pub pairs: BlockMap,
+    pub nodes: BlockMap,
+    pub multipliers: BlockMap,
+    /// The diagonal entry of every dof (springs, inertia).
+    pub diagonal: BlockMap,
+    /// One block per edge of a follower-pressure load (its two nodes' dofs), in load order.
+    pub pressure: BlockMap,
+}
+
+/// The global system (see the module docs).
+pub(super) struct System {
+    pub assembler: Assembler,
+    pub kk: CsrMatrix,
+    pub maps: TermMaps,
+    /// The free residual F_ext − F_int (and the multiplier rows) and the Newton update.
+    pub r: Vec<f64>,
+    pub du: Vec<f64>,
+    /// Internal and external forces of every dof at the last evaluation (N/mm).
+    pub f_int: Vec<f64>,
+    pub f_ext: Vec<f64>,
+    /// ‖F_int‖ of the elements alone at the last evaluation (the force scale of a problem
+    /// driven by walls).
+    pub f_elem_norm: f64,
+    /// The element fields of the last evaluation (committed with the step).
+    pub trial_fields: ElementFields,
+    /// Part of a transferred state's out-of-balance force still held back while a
+    /// re-equilibration releases it (added to F_int; empty otherwise), per dof (N/mm).
+    pub eq_offset: Vec<f64>,
+    pub linear: Box<dyn LinearSolver>,
+    pub linear_name: String,
+    pub pool: Option<rayon::ThreadPool>,
+    /// The processes of the run ([`crate::comm::Serial`] for one).
+    pub comm: Arc<dyn Collective>,
+    /// What this process owns in a run on several processes (None: one process).
+    pub par: Option<Distribution>,
+    /// The partition's figures (one process: 1 rank, imbalance 1, no cut, no repartitions).
+    pub partition: PartitionStats,
+    /// Whether every process takes part in the linear solves (the Schwarz PCG on several
+    /// processes); otherwise rank 0 solves and broadcasts the update.
+    pub distributed_solve: bool,
+}
+
+impl System {
+    /// Whether this process takes part in the linear solves (rank 0, or every process with
+    /// the distributed Schwarz PCG).
+    pub fn solves_here(&self) -> bool {
+        self.comm.is_root() || self.distributed_solve
+    }
+
+    /// A linear-algebra result of the solving process, known to every process.
+    pub fn agree(&self, r: Result<(), NewtonFailure>, what: &str) -> Result<(), NewtonFailure> {
+        agree_linear(self.par.as_ref(), r, what)
+    }
+
+    /// Locate the diagonal, node and follower-load blocks in the current pattern (after it
+    /// changed).
+    pub fn locate_fixed_terms(&mut self, model: &crate::model::Model, node_dofs: &[Vec<usize>]) {
+        self.maps.diagonal = self.assembler.diagonal_map(&self.kk);
+        self.maps.nodes = self.assembler.block_map(&self.kk, node_dofs);
+        let edges: Vec<Vec<usize>> = model
+            .loading
+            .loads
+            .iter()
+            .filter(|l| matches!(l.kind, LoadKind::Pressure(_)))
+            .flat_map(|l| l.edges.iter().map(|e| vec![2 * e[0], 2 * e[0] + 1, 2 * e[1], 2 * e[1] + 1]))
+            .collect();
+        self.maps.pressure = self.assembler.block_map(&self.kk, &edges);
+    }
+
+    /// The symbolic analysis of the current pattern, on the solving processes (a failure there
+    /// fails every process).
+    pub fn analyze(&mut self) -> Result<(), NewtonFailure> {
+        if self.assembler.n_free == 0 {
+            return Ok(());
+        }
+        let r = if self.solves_here() { self.linear.analyze(&self.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+        self.agree(r, "symbolic analysis")
+    }
+}
+
+impl Simulation {
+    /// External force vector at time t on configuration `x` (all dofs), and, with a tangent,
+    /// the derivative of the follower pressures subtracted from it.
+    fn external_forces(&mut self, t: f64, x: &[[f64; 2]], with_tangent: bool) {
+        let sys = &mut self.sys;
+        let f = &mut sys.f_ext;
+        f.iter_mut().for_each(|v| *v = 0.0);
+        let loading = &self.model.loading;
+        let mut pressure_edge = 0;
+        for load in &loading.loads {
+            let amp = loading.amplitude(load.amplitude, t);
+            for e in &load.edges {
+                let (a, b) = (e[0], e[1]);
+                match &load.kind {
+                    LoadKind::Traction(tr) | LoadKind::Force(tr) => {
+                        let scale = if matches!(load.kind, LoadKind::Force(_)) { 1.0 / load.length0 } else { 1.0 };
+                        let (pa, pb) = (self.model.x0[a], self.model.x0[b]);
+                        let len = ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2)).sqrt();
+                        for c in 0..2 {
+                            let v = 0.5 * amp * scale * tr[c] * len;
+                            f[2 * a + c] += v;
+                            f[2 * b + c] += v;
+                        }
+                    }
+                    LoadKind::Pressure(p) => {
+                        // force on each node: −p/2 · (outward normal × length) = −p/2 (Δy, −Δx)
+                        let p = p * amp;
+                        let (xa, xb) = (x[a], x[b]);
+                        let fx = -0.5 * p * (xb[1] - xa[1]);
+                        let fy = 0.5 * p * (xb[0] - xa[0]);
+                        for n in [a, b] {
+                            f[2 * n] += fx;
+                            f[2 * n + 1] += fy;
+                        }
+                        if with_tangent {
+                            // K −= ∂f_ext/∂x:  ∂fx/∂y_b = −p/2, ∂fx/∂y_a = p/2, ∂fy/∂x_b = p/2,
+                            // ∂fy/∂x_a = −p/2 (block dofs [a_x, a_y, b_x, b_y])
+                            for ni in 0..2 {
+                                for (row, col, d) in [(2 * ni, 3, -0.5 * p), (2 * ni, 1, 0.5 * p), (2 * ni + 1, 2, 0.5 * p), (2 * ni + 1, 0, -0.5 * p)] {
+                                    sys.maps.pressure.add_entry(&mut sys.kk.values, pressure_edge, row, col, -d);
+                                }
+                            }
+                        }
+                        pressure_edge += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Assemble at displacement `u` (see the module docs for the order of the terms): fills
+    /// `f_int`, `f_ext`, the free residual `r` and (if asked) the tangent. Returns ‖r‖.
+    pub(super) fn evaluate(&mut self, u: &[f64], inc: TimeIncrement, vol: &[Volumetric], tangent: bool) -> Result<f64, AssemblyError> {
+        let x = self.coords(u);
+        // on several processes the element tangent is summed onto rank 0 right after the
+        // element assembly; the rest (loads, contact, springs, inertia) rank 0 alone adds
+        let root_tangent = tangent && self.sys.comm.is_root();
+        {
+            let _t = self.clock.scope(Phase::ElementAssembly);
+            let sys = &mut self.sys;
+            let kk = if tangent { Some(&mut sys.kk) } else { None };
+            let assembled = sys.assembler.assemble(&self.model, u, &self.sol.fields.states, &self.sol.fields.alpha, vol, Some(&self.sol.j0), inc, kk, &mut sys.f_int, &mut sys.trial_fields, sys.pool.as_ref());
+            match &sys.par {
+                Some(p) => {
+                    p.agree(assembled)?;
+                    // every dof and every tangent entry of the elements belongs to one body, so
+                    // only its owner adds to it: the sums are exact, and rank 0 then adds the
+                    // rest in the serial order (the run is bit-identical to the serial one)
+                    p.comm.sum_in_place(&mut sys.f_int);
+                    if tangent {
+                        p.comm.sum_to_root(&mut sys.kk.values);
+                    }
+                }
+                None => assembled?,
+            }
+        }
+        self.external_forces(inc.time, &x, root_tangent);
+        // element forces alone: with contact they balance the contact forces, which makes them
+        // the force scale of a problem driven by walls (no external force, no reaction)
+        self.sys.f_elem_norm = self.sys.f_int.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if let Some(c) = self.contact.as_mut() {
+            let _t = self.clock.scope(Phase::ContactAssembly);
+            let sys = &mut self.sys;
+            let walls = self.model.wall_planes(inc.time);
+            let tangent_out = root_tangent.then_some(ContactTangent { values: &mut sys.kk.values, pairs: &sys.maps.pairs, nodes: &sys.maps.nodes, multipliers: &sys.maps.multipliers });
+            self.contact_stats = match &sys.par {
+                // each process evaluates the pairs of its own particles' slave nodes; the
+                // evaluations go to every process (the tangent blocks to rank 0), which add
+                // them in the serial order
+                Some(p) if c.spec.method != crate::contact::ContactMethod::Lagrange => {
+                    c.evaluate(&x, &walls, tangent, &|body| p.owns_body(body), &mut self.contact_evals);
+                    let all = p.gather_contact(&self.contact_evals, tangent, c.boundary.pair_width());
+                    c.apply(&all, &x, &mut sys.f_int, tangent_out)
+                }
+                _ => c.add(&x, &walls, &mut sys.f_int, tangent_out, &mut self.contact_evals),
+            };
+            // the stabilisation springs (in residual and tangent, dissipate energy) and the
+            // tangent-only regularisation
+            self.springs.add(u, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
+        }
+        // implicit dynamics: inertia (HHT-weighted) in F_int, M/((1+α)βΔt²) on the diagonal
+        if let Some(dy) = self.dynamics.as_ref() {
+            let sys = &mut self.sys;
+            dy.add_inertia(u, inc.dt, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
+        }
+        let sys = &mut self.sys;
+        if !sys.eq_offset.is_empty() {
+            for (f, o) in sys.f_int.iter_mut().zip(&sys.eq_offset) {
+                *f += o;
+            }
+        }
+        let mut norm2 = 0.0;
+        for (d, &q) in sys.assembler.eq.iter().enumerate() {
+            if q != FIXED {
+                let v = sys.f_ext[d] - sys.f_int[d];
+                sys.r[q] = v;
+                norm2 += v * v;
+            }
+        }
+        // Lagrange-multiplier rows (scaled to forces, see `Multipliers::rows`)
+        if let Some(c) = self.contact.as_ref() {
+            let n_free = sys.assembler.n_free;
+            for (k, &f) in c.lm.rows.iter().enumerate() {
+                sys.r[n_free + k] = -f;
+                norm2 += f * f;
+            }
+        }
+        Ok(norm2.sqrt())
+    }
+
+    /// Factorise the tangent (the solving processes; the others learn the outcome).
+    pub(super) fn factor(&mut self) -> Result<(), NewtonFailure> {
+        let _t = self.clock.scope(Phase::LinearSolve);
+        let sys = &mut self.sys;
+        if sys.distributed_solve {
+            // rank 0 holds the whole tangent (elements summed, contact added): every process
+            // needs the rows of its particles
+            sys.comm.broadcast(&mut sys.kk.values);
+        }
+        let r = if sys.solves_here() { sys.linear.factor(&sys.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
+        sys.agree(r, "factorisation")
+    }
+
+    /// Solve `kk du = r` (rank 0 solves, the others receive `du`).
+    pub(super) fn solve_linear(&mut self) -> Result<(), NewtonFailure> {
+        let sys = &mut self.sys;
+        let r = if sys.solves_here() {
+            match sys.linear.solve(&sys.kk, &sys.r, &mut sys.du) {
+                Ok(st) => {
+                    self.clock.count_solve(st.iterations);
+                    Ok(())
+                }
+                Err(e) => Err(NewtonFailure::Linear(e.to_string())),
+            }
+        } else {
+            Ok(())
+        };
+        let r = sys.agree(r, "linear solve");
+        // (the distributed solve leaves the same update on every process)
+        if r.is_ok() && sys.par.is_some() && !sys.distributed_solve {
+            sys.comm.broadcast(&mut sys.du);
+        }
+        r
+    }
+}
+
+/// A linear-algebra result of rank 0 (the only one that factors and solves), known to every
+/// process of a run on several processes (`par`); unchanged on one.
+pub(super) fn agree_linear(par: Option<&Distribution>, r: Result<(), NewtonFailure>, what: &str) -> Result<(), NewtonFailure> {
+    let Some(p) = par else { return r };
+    // the other processes wait here while rank 0 factorises and solves: asleep, so that their
+    // cores are free for other work (a blocking collective spins on them; with more ranks than
+    // cores it took the core of a rank that was working)
+    p.comm.idle_barrier();
+    let mut failed = [if r.is_err() { 1.0 } else { 0.0 }];
+    p.comm.broadcast(&mut failed);
+    match r {
+        Err(e) => Err(e),
+        Ok(()) if failed[0] > 0.0 => Err(NewtonFailure::Linear(format!("{what} failed on rank 0"))),
+        Ok(()) => Ok(()),
+    }
+}
