@@ -39,6 +39,7 @@ pub mod packing;
 pub mod parallel;
 pub mod plot;
 pub mod remesh;
+pub mod run;
 pub mod solver;
 pub mod study;
 pub mod verify;
