@@ -34,6 +34,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod pack;
 pub mod results;
 pub mod packing;
 pub mod parallel;

@@ -14,10 +14,9 @@
 //! (continue it with `--restart`), 130 a second SIGTERM/SIGINT ended the run at once.
 
 
-use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use mpfem::case::{self, Case};
+use mpfem::case;
 use mpfem::model::Model;
 use mpfem::plot::{PlotRequest, RunDir, StepChoice, StepSpec};
 use mpfem::run::{error_chain, CaseFile, Note, Progress, Reporter, RunOptions};
@@ -250,6 +249,8 @@ fn main() -> ExitCode {
     }
 }
 
+/// `mpfem pack`: expand the case's grids, packings and imports into bodies, write them as a
+/// case file and a preview.
 fn pack(case_path: &Path, out: &Path) -> ExitCode {
     let c = match case::load(case_path) {
         Ok(c) => c,
@@ -258,72 +259,24 @@ fn pack(case_path: &Path, out: &Path) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match write_packing(case_path, &c, out) {
-        Ok(()) => ExitCode::SUCCESS,
+    let p = match mpfem::pack::write_packing(case_path, &c, out) {
+        Ok(p) => p,
         Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            eprintln!("error: {}", error_chain(&e));
+            return ExitCode::from(2);
         }
+    };
+    match p.solid_ratio {
+        Some(r) => println!("{}: {} particles, solid ratio {r:.6} (particle area {:.6} mm^2)", case_path.display(), p.particles, p.area),
+        None => println!("{}: {} particles (no die: the case has not all four walls)", case_path.display(), p.particles),
     }
-}
-
-fn write_packing(case_path: &Path, c: &Case, out: &Path) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(case_path).with_context(|| format!("cannot read {}", case_path.display()))?;
-    let mut table: toml::Table = text.parse().with_context(|| format!("cannot parse {}", case_path.display()))?;
-    table.remove("grids");
-    table.remove("packings");
-    table.remove("imports");
-    // the written case lives elsewhere: hardening tables given by a relative path are pointed
-    // at the original file
-    let base = case_path.parent().unwrap_or(Path::new("."));
-    if let Some(toml::Value::Array(materials)) = table.get_mut("materials") {
-        for m in materials {
-            if let Some(f) = m.get_mut("hardening").and_then(|h| h.get_mut("file")) {
-                if let Some(rel) = f.as_str().map(Path::new).filter(|p| p.is_relative()) {
-                    let abs = std::path::absolute(base.join(rel)).with_context(|| format!("cannot resolve {}", rel.display()))?;
-                    *f = toml::Value::String(abs.display().to_string());
-                }
-            }
-        }
-    }
-    let bodies: Vec<toml::Value> = c.bodies.iter().map(|b| toml::Value::Table(b.to_toml(&c.materials))).collect();
-    table.insert("bodies".into(), toml::Value::Array(bodies));
-    let body = toml::to_string(&table).context("cannot write the packed case as TOML")?;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let packed = out.join("packed.toml");
-    let header = format!(
-        "# Written by `mpfem pack` from {}: the case with its [[grids]], [[packings]] and [[imports]]\n# replaced by the [[bodies]] they generate (hardening table and gmsh files by absolute path).\n\n",
-        case_path.display()
-    );
-    std::fs::write(&packed, header + &body).with_context(|| format!("cannot write {}", packed.display()))?;
-
-    let die = case::die_of(&c.walls);
-    let area: f64 = c.bodies.iter().filter_map(|b| b.shape.particle()).map(|s| s.area()).sum();
-    let ratio = die.map(|d| area / ((d[1] - d[0]) * (d[3] - d[2])));
-    let particles: Vec<mpfem::plot::PreviewParticle> = c
-        .bodies
-        .iter()
-        .filter_map(|b| b.shape.particle().map(|s| mpfem::plot::PreviewParticle { outline: s.outline(96), material: b.material }))
-        .collect();
-    let names: Vec<String> = c.materials.iter().map(|m| m.name.clone()).collect();
-    let mut title = vec![if c.title.is_empty() { case_path.display().to_string() } else { c.title.clone() }];
-    title.push(match ratio {
-        Some(r) => format!("{} particles, solid ratio {r:.4}", c.bodies.len()),
-        None => format!("{} particles", c.bodies.len()),
-    });
-    let png = out.join("packing.png");
-    let preview = mpfem::plot::packing_png(&particles, &names, die, &title, &png);
-    match ratio {
-        Some(r) => println!("{}: {} particles, solid ratio {r:.6} (particle area {area:.6} mm^2)", case_path.display(), c.bodies.len()),
-        None => println!("{}: {} particles (no die: the case has not all four walls)", case_path.display(), c.bodies.len()),
-    }
-    println!("wrote {}", packed.display());
-    match preview {
-        Ok(()) => println!("wrote {}", png.display()),
+    println!("wrote {}", p.packed.display());
+    match &p.preview {
+        Ok(()) => println!("wrote {}", p.png.display()),
         // the packing is written; a missing font only costs the picture
         Err(e) => eprintln!("warning: no preview: {e}"),
     }
-    Ok(())
+    ExitCode::SUCCESS
 }
 
 fn parse_step(s: &str) -> Result<StepSpec, String> {
