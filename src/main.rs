@@ -13,12 +13,10 @@
 //! the checkpoint's), 3 `run` stopped by SIGTERM or SIGINT after writing its checkpoint
 //! (continue it with `--restart`), 130 a second SIGTERM/SIGINT ended the run at once.
 
-
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mpfem::case;
-use mpfem::model::Model;
-use mpfem::plot::{PlotRequest, RunDir, StepChoice, StepSpec};
+use mpfem::plot::{PlotRequest, StepSpec};
 use mpfem::run::{error_chain, CaseFile, Note, Progress, Reporter, RunOptions};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -156,45 +154,7 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).init();
 
     match cli.command {
-        Command::Check { case } => match case::load(&case) {
-            Ok(c) => match Model::from_case(&c) {
-                Ok(m) => {
-                    let (mut min_sj, mut max_ar, mut inverted) = (f64::INFINITY, 0.0f64, 0usize);
-                    for b in &m.bodies {
-                        let q = mpfem::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
-                        min_sj = min_sj.min(q.min_scaled_jacobian);
-                        max_ar = max_ar.max(q.max_aspect_ratio);
-                        inverted += q.n_inverted;
-                    }
-                    println!(
-                        "{}: OK — \"{}\": {} material(s), {} body(ies), {} nodes, {} elements, {} prescribed dofs, {} load(s), end time {} s",
-                        case.display(),
-                        c.title,
-                        c.materials.len(),
-                        c.bodies.len(),
-                        m.n_nodes(),
-                        m.elements.len(),
-                        m.prescribed.len(),
-                        m.loads.len(),
-                        c.time.end
-                    );
-                    println!("mesh quality: min scaled Jacobian {min_sj:.3}, max aspect ratio {max_ar:.2}, {inverted} inverted element(s)");
-                    if inverted > 0 {
-                        eprintln!("error: {}: the mesh has {inverted} inverted element(s)", case.display());
-                        return ExitCode::from(2);
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {}: {e}", case.display());
-                    ExitCode::from(2)
-                }
-            },
-            Err(e) => {
-                eprintln!("error: {}: {e}", case.display());
-                ExitCode::from(2)
-            }
-        },
+        Command::Check { case } => check(&case),
         Command::Plot { dir, compare, label, steps, out } => plot(dir, compare, label, steps, out),
         Command::Pack { case, out } => pack(&case, &out),
         Command::Study { study, out, parallel } => ExitCode::from(mpfem::study::run(&study, &out, parallel, &Console::new()).exit_code()),
@@ -249,6 +209,36 @@ fn main() -> ExitCode {
     }
 }
 
+/// `mpfem check`: exit 0 when the case makes a model without inverted elements, else 2.
+fn check(case: &Path) -> ExitCode {
+    let checked = case::load(case).map_err(|e| e.to_string()).and_then(|c| mpfem::run::check(&c).map(|k| (c, k)).map_err(|e| e.to_string()));
+    let (c, k) = match checked {
+        Ok(ck) => ck,
+        Err(e) => {
+            eprintln!("error: {}: {e}", case.display());
+            return ExitCode::from(2);
+        }
+    };
+    println!(
+        "{}: OK — \"{}\": {} material(s), {} body(ies), {} nodes, {} elements, {} prescribed dofs, {} load(s), end time {} s",
+        case.display(),
+        c.title,
+        c.materials.len(),
+        c.bodies.len(),
+        k.n_nodes,
+        k.n_elements,
+        k.n_prescribed,
+        k.n_loads,
+        c.time.end
+    );
+    println!("mesh quality: min scaled Jacobian {:.3}, max aspect ratio {:.2}, {} inverted element(s)", k.min_scaled_jacobian, k.max_aspect_ratio, k.n_inverted);
+    if k.n_inverted > 0 {
+        eprintln!("error: {}: the mesh has {} inverted element(s)", case.display(), k.n_inverted);
+        return ExitCode::from(2);
+    }
+    ExitCode::SUCCESS
+}
+
 /// `mpfem pack`: expand the case's grids, packings and imports into bodies, write them as a
 /// case file and a preview.
 fn pack(case_path: &Path, out: &Path) -> ExitCode {
@@ -291,19 +281,7 @@ fn plot(dir: PathBuf, compare: Vec<PathBuf>, labels: Vec<String>, steps: Option<
         eprintln!("error: --label given {} time(s) for {} run(s): expected one label per results folder (DIR, then each --compare)", labels.len(), dirs.len());
         return ExitCode::from(2);
     }
-    let runs: Vec<RunDir> = dirs
-        .iter()
-        .enumerate()
-        .map(|(i, d)| RunDir { dir: d.clone(), label: labels.get(i).cloned().unwrap_or_else(|| mpfem::plot::default_label(d)) })
-        .collect();
-    let req = PlotRequest {
-        out: out.unwrap_or_else(|| dirs[0].clone()),
-        runs,
-        steps: match steps {
-            Some(s) => StepChoice::Explicit(s),
-            None => StepChoice::Spread(mpfem::plot::DEFAULT_SNAPSHOTS),
-        },
-    };
+    let req = PlotRequest::of_folders(&dirs, &labels, steps, out);
     match mpfem::plot::plot_results(&req) {
         Ok(r) => {
             let console = Console::new();

@@ -22,7 +22,7 @@ use crate::fits::CurvePoint;
 use crate::model::Model;
 use crate::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
 use crate::parallel::Collective;
-use crate::plot::{PlotReport, PlotRequest, RunDir, StepChoice};
+use crate::plot::{PlotReport, PlotRequest};
 use crate::results::{ResultsError, ResultsWriter};
 use crate::solver::{RunSummary, Simulation, SolveError, StepReport};
 use std::ops::ControlFlow;
@@ -201,6 +201,45 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
     text
 }
 
+/// What `mpfem check` tells of a case without running it: the size of its model and the
+/// quality of its meshes (over every body).
+#[derive(Clone, Copy, Debug)]
+pub struct CaseCheck {
+    pub n_nodes: usize,
+    pub n_elements: usize,
+    pub n_prescribed: usize,
+    pub n_loads: usize,
+    /// Smallest scaled Jacobian of any element (≤ 0: inverted).
+    pub min_scaled_jacobian: f64,
+    /// Largest longest-over-shortest edge ratio of any element.
+    pub max_aspect_ratio: f64,
+    pub n_inverted: usize,
+}
+
+/// Build the model of case `c` and measure its meshes ([`crate::mesh::quality::quality`]).
+///
+/// # Errors
+/// The model's error when the case does not make one.
+pub fn check(c: &Case) -> Result<CaseCheck, crate::model::ModelError> {
+    let m = Model::from_case(c)?;
+    let mut k = CaseCheck {
+        n_nodes: m.n_nodes(),
+        n_elements: m.elements.len(),
+        n_prescribed: m.prescribed.len(),
+        n_loads: m.loads.len(),
+        min_scaled_jacobian: f64::INFINITY,
+        max_aspect_ratio: 0.0,
+        n_inverted: 0,
+    };
+    for b in &m.bodies {
+        let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
+        k.min_scaled_jacobian = k.min_scaled_jacobian.min(q.min_scaled_jacobian);
+        k.max_aspect_ratio = k.max_aspect_ratio.max(q.max_aspect_ratio);
+        k.n_inverted += q.n_inverted;
+    }
+    Ok(k)
+}
+
 /// Which case file a run used: its path and the SHA-256 of its text (the version of the case
 /// that produced the results), for `summary.json` and the checkpoint.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -303,12 +342,7 @@ pub fn report_plots(r: &PlotReport, reporter: &dyn Reporter) {
 
 /// The plots at the end of a run, from whatever the run wrote; failures are warnings.
 fn plots_after_run(out: &Path, reporter: &dyn Reporter) {
-    let label = crate::plot::default_label(out);
-    let req = PlotRequest {
-        runs: vec![RunDir { dir: out.to_path_buf(), label }],
-        out: out.to_path_buf(),
-        steps: StepChoice::Spread(crate::plot::DEFAULT_SNAPSHOTS),
-    };
+    let req = PlotRequest::of_folders(&[out.to_path_buf()], &[], None, None);
     match crate::plot::plot_results(&req) {
         Ok(r) => {
             for s in &r.skipped {
