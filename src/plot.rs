@@ -1013,6 +1013,17 @@ pub struct PlotRequest {
     pub steps: StepChoice,
 }
 
+impl PlotRequest {
+    /// The results folders `dirs`, labelled by `labels` in their order (a folder without one:
+    /// its name, [`default_label`]); the pictures go to `out` (default: the first folder);
+    /// the snapshots are `steps` (default: [`DEFAULT_SNAPSHOTS`] spread over the output steps).
+    pub fn of_folders(dirs: &[PathBuf], labels: &[String], steps: Option<Vec<StepSpec>>, out: Option<PathBuf>) -> Self {
+        let runs = dirs.iter().enumerate().map(|(i, d)| RunDir { dir: d.clone(), label: labels.get(i).cloned().unwrap_or_else(|| default_label(d)) }).collect();
+        let steps = steps.map_or(StepChoice::Spread(DEFAULT_SNAPSHOTS), StepChoice::Explicit);
+        Self { out: out.unwrap_or_else(|| dirs.first().cloned().unwrap_or_default()), runs, steps }
+    }
+}
+
 /// What [`plot_results`] did.
 #[derive(Clone, Debug, Default)]
 pub struct PlotReport {

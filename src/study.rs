@@ -21,9 +21,17 @@
 //! Keys are dotted paths into the case file; a number indexes an array of tables
 //! (`walls.1.velocity`). Each run's case is the base case with its keys set, parsed and
 //! validated like any case (its errors name the run).
+//!
+//! [`run`] runs a study ([`crate::run::run`] for each of its runs, several at once), draws the
+//! overlay of their pressures and writes the table of their final values.
 
+use crate::case::Case;
+use crate::plot::{PlotRequest, RunDir, StepChoice};
+use crate::run::{CaseFile, Note, Reporter, RunOptions};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use thiserror::Error;
 
 #[derive(Debug, Error)]
@@ -182,6 +190,176 @@ pub fn load(path: &Path) -> Result<Study, StudyError> {
         runs.push(StudyRun { label, case_path, set, text });
     }
     Ok(Study { title: raw.title.unwrap_or_else(|| path.file_stem().map_or("study".into(), |s| s.to_string_lossy().into_owned())), parallel, runs })
+}
+
+/// How a study ended (the binary's exit code: [`StudyOutcome::exit_code`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum StudyOutcome {
+    /// Every run completed (exit code 0).
+    Completed,
+    /// The runs with these labels did not complete; the others, the plot and the table are
+    /// written (exit code 1).
+    Failed(Vec<String>),
+    /// The study file or a run's case is not usable; nothing was run (exit code 2). The text
+    /// is the one reported.
+    BadInput(String),
+}
+
+impl StudyOutcome {
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Self::Completed => 0,
+            Self::Failed(_) => 1,
+            Self::BadInput(_) => 2,
+        }
+    }
+}
+
+/// `mpfem study`: the study file at `path`, every run in its own folder `out/<label>/` (its
+/// case text as `case.toml` there), at most `parallel` at once (default: the study's
+/// `parallel`, else the number of cores) with one thread each, quiet; then the overlay
+/// pressure plot of every run that wrote a history and the table of final values
+/// ([`write_table`]). Every run's case is validated before anything runs.
+pub fn run(path: &Path, out: &Path, parallel: Option<usize>, reporter: &dyn Reporter) -> StudyOutcome {
+    let bad = |text: String| {
+        reporter.note(Note::Error, &text);
+        StudyOutcome::BadInput(text)
+    };
+    let study = match load(path) {
+        Ok(s) => s,
+        Err(e) => return bad(e.to_string()),
+    };
+    let mut cases = Vec::new();
+    for r in &study.runs {
+        let base = r.case_path.parent().unwrap_or(Path::new("."));
+        match crate::case::parse(&r.text, base) {
+            Ok(c) => cases.push(c),
+            Err(e) => return bad(format!("{}: run \"{}\": {e}", path.display(), r.label)),
+        }
+    }
+    if let Err(e) = std::fs::create_dir_all(out) {
+        return bad(format!("cannot create {}: {e}", out.display()));
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let workers = parallel.or(study.parallel).unwrap_or(cores).clamp(1, study.runs.len());
+    reporter.note(Note::Info, &format!("study \"{}\": {} run(s), {workers} at once, into {}", study.title, study.runs.len(), out.display()));
+    let next = AtomicUsize::new(0);
+    // (whether each run completed; None: not run)
+    let completed: Vec<Mutex<Option<bool>>> = study.runs.iter().map(|_| Mutex::new(None)).collect();
+    let cases: Vec<Mutex<Option<Case>>> = cases.into_iter().map(|c| Mutex::new(Some(c))).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                let Some(r) = study.runs.get(i) else { break };
+                let Some(c) = cases[i].lock().ok().and_then(|mut c| c.take()) else { break };
+                let dir = out.join(&r.label);
+                let case_path = dir.join("case.toml");
+                let written = std::fs::create_dir_all(&dir).and_then(|_| std::fs::write(&case_path, &r.text));
+                let ok = match written {
+                    Err(e) => {
+                        reporter.note(Note::Error, &format!("run \"{}\": cannot write {}: {e}", r.label, case_path.display()));
+                        false
+                    }
+                    Ok(()) => {
+                        let opts = RunOptions { threads: Some(1), quiet: true, ..RunOptions::new(&dir) };
+                        let label = format!("{} ({})", r.label, case_path.display());
+                        match crate::run::run(c, &label, Some(CaseFile::describe(&case_path)), &opts, Arc::new(crate::comm::Serial), reporter) {
+                            Ok(outcome) => outcome.exit_code() == 0,
+                            Err(e) => {
+                                reporter.note(Note::Error, &format!("run \"{}\": {}", r.label, crate::run::error_chain(&e)));
+                                false
+                            }
+                        }
+                    }
+                };
+                if let Ok(mut slot) = completed[i].lock() {
+                    *slot = Some(ok);
+                }
+            });
+        }
+    });
+    let failed: Vec<String> = study
+        .runs
+        .iter()
+        .zip(&completed)
+        .filter(|(_, c)| c.lock().ok().and_then(|c| *c) != Some(true))
+        .map(|(r, _)| r.label.clone())
+        .collect();
+    // the overlay of every run that wrote a history, and the table
+    let dirs: Vec<(String, PathBuf)> = study.runs.iter().map(|r| (r.label.clone(), out.join(&r.label))).filter(|(_, d)| d.join("history.csv").is_file()).collect();
+    if !dirs.is_empty() {
+        let req = PlotRequest {
+            out: out.to_path_buf(),
+            runs: dirs.iter().map(|(l, d)| RunDir { dir: d.clone(), label: l.clone() }).collect(),
+            steps: StepChoice::Explicit(Vec::new()),
+        };
+        match crate::plot::plot_results(&req) {
+            Ok(r) => crate::run::report_plots(&r, reporter),
+            Err(e) => reporter.note(Note::Warning, &format!("study plot: {e}")),
+        }
+    }
+    match write_table(out, &study) {
+        Ok(paths) => {
+            let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+            reporter.note(Note::Info, &format!("wrote {}", names.join(", ")));
+        }
+        Err(e) => reporter.note(Note::Warning, &format!("study table: {e}")),
+    }
+    if failed.is_empty() {
+        StudyOutcome::Completed
+    } else {
+        reporter.note(Note::Error, &format!("{} of {} run(s) failed: {}", failed.len(), study.runs.len(), failed.join(", ")));
+        StudyOutcome::Failed(failed)
+    }
+}
+
+/// `out/study.csv` and `out/study.md`: one row per run with its final values from its
+/// `summary.json` (empty cells where a value is missing, status "not run" without a summary).
+/// Returns the two paths.
+pub fn write_table(out: &Path, study: &Study) -> std::io::Result<Vec<PathBuf>> {
+    let head = ["label", "status", "stop_reason", "steps", "solid_ratio", "p_left", "p_right", "p_bottom", "p_top", "volume_error", "max_particle_volume_error", "heckel_k", "kawakita_a", "kawakita_b", "wall_time_s"];
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    for r in &study.runs {
+        let s: serde_json::Value = std::fs::read_to_string(out.join(&r.label).join("summary.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok())
+            .unwrap_or(serde_json::Value::Null);
+        let num = |v: &serde_json::Value| v.as_f64().map_or(String::new(), |x| format!("{x:.6e}"));
+        let f = &s["final"];
+        let text = |v: &serde_json::Value| v.as_str().unwrap_or("").to_string();
+        let mut row = vec![
+            r.label.clone(),
+            s["status"].as_str().unwrap_or("not run").to_string(),
+            text(&s["run"]["stop_reason"]),
+            s["run"]["steps"].as_u64().map_or(String::new(), |n| n.to_string()),
+            num(&f["solid_ratio"]),
+        ];
+        for k in 0..4 {
+            row.push(num(&f["pressure"][k]));
+        }
+        row.push(num(&f["volume_error"]));
+        row.push(num(&f["max_particle_volume_error"]));
+        row.push(num(&s["fits"]["heckel"]["k"]));
+        row.push(num(&s["fits"]["kawakita"]["a"]));
+        row.push(num(&s["fits"]["kawakita"]["b"]));
+        row.push(num(&s["wall_time_s"]));
+        rows.push(row);
+    }
+    let csv_path = out.join("study.csv");
+    let quote = |c: &String| if c.contains([',', '"']) { format!("\"{}\"", c.replace('"', "\"\"")) } else { c.clone() };
+    let mut csv = head.join(",") + "\n";
+    for r in &rows {
+        csv += &(r.iter().map(quote).collect::<Vec<_>>().join(",") + "\n");
+    }
+    std::fs::write(&csv_path, csv)?;
+    let md_path = out.join("study.md");
+    let mut md = format!("# {}\n\n| {} |\n|{}|\n", study.title, head.join(" | "), vec!["---"; head.len()].join("|"));
+    for r in &rows {
+        md += &format!("| {} |\n", r.join(" | "));
+    }
+    std::fs::write(&md_path, md)?;
+    Ok(vec![csv_path, md_path])
 }
 
 #[cfg(test)]

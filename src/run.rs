@@ -1,0 +1,733 @@
+//! Running a case from start to end (or on from a checkpoint): what `mpfem run` does, as a
+//! library call a test can make.
+//!
+//! [`run`] reads the checkpoint to continue from and refuses a case that is not the one it was
+//! written with (its SHA-256 differs) unless told to go on; splits the work over the MPI ranks
+//! (rank 0 writes, the others solve along); writes `history.csv`, `results.h5`/`.xdmf`, a
+//! checkpoint every `[output] checkpoint_every` steps, every `checkpoint_minutes` and after the
+//! step in which the stop flag was set; fits the pressure–density curve; writes
+//! `summary.json`; draws the plots. It returns a [`RunOutcome`] (completed, interrupted with or
+//! without a checkpoint, failed, bad input) and never prints: every line for the user goes to a
+//! [`Reporter`] the caller implements (the binary prints them, a progress bar on a terminal).
+//!
+//! ```text
+//!  Case ─► checkpoint? ─► Model ─► Simulation ──step──► history, results, checkpoint ─► summary ─► plots
+//!                                               │
+//!                                               └─► Reporter::step (progress), stop flag read
+//! ```
+
+use crate::case::Case;
+use crate::checkpoint::Checkpoint;
+use crate::fits::CurvePoint;
+use crate::model::Model;
+use crate::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
+use crate::comm::Collective;
+use crate::plot::{PlotReport, PlotRequest};
+use crate::results::{ResultsError, ResultsWriter};
+use crate::solver::{RunSummary, Simulation, SolveError, StepReport};
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// What kind of line a [`Reporter::note`] is (the binary prefixes `mpfem: `, `warning: `,
+/// `error: `).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Note {
+    /// What the run does or did: its start, a restart, a checkpoint, how it ended.
+    Info,
+    /// Something went wrong that does not stop the run (a checkpoint or a plot not written).
+    Warning,
+    /// Why the run did not start or did not finish.
+    Error,
+}
+
+/// Where a run's lines for the user go. Called on rank 0 only (the other ranks are silent),
+/// from the study's worker threads at once (hence `Sync`).
+pub trait Reporter: Sync {
+    /// One line for the user, without its prefix and newline.
+    fn note(&self, kind: Note, text: &str);
+    /// The time steps begin (after the start line); not called for a quiet run.
+    fn steps_begin(&self) {}
+    /// After every converged step, before the stop flag is read (so a flag set here stops the
+    /// run after this step); not called for a quiet run.
+    fn step(&self, _progress: &Progress) {}
+    /// The time steps are over (before the closing lines); not called for a quiet run.
+    fn steps_end(&self) {}
+}
+
+/// A reporter that drops everything.
+pub struct Silent;
+
+impl Reporter for Silent {
+    fn note(&self, _kind: Note, _text: &str) {}
+}
+
+/// How far a run is after a converged step ([`Reporter::step`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Progress<'a> {
+    pub report: &'a StepReport,
+    /// The fraction of the run done, in [0, 1] ([`progress`]).
+    pub done: f64,
+    /// The solid ratio now and the one the run stops at (`[stop] solid_ratio`), if any.
+    pub solid_ratio: Option<f64>,
+    pub target: Option<f64>,
+    /// Wall-clock seconds since this process started the run.
+    pub elapsed_s: f64,
+}
+
+impl Progress<'_> {
+    /// `solid ratio 0.8123 → 0.95 | t 1.2000e-1 s | step 12 | dt 1.00e-2 | 4 it`.
+    pub fn line(&self) -> String {
+        let r = self.report;
+        let density = match (self.solid_ratio, self.target) {
+            (Some(p), Some(t)) => format!("solid ratio {p:.4} → {t} | "),
+            (Some(p), None) => format!("solid ratio {p:.4} | "),
+            _ => String::new(),
+        };
+        format!("{density}t {:.4e} s | step {} | dt {:.2e} | {} it", r.time, r.step, r.dt, r.newton_iterations)
+    }
+}
+
+/// How a run is controlled from outside its case.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Output folder for history.csv, summary.json, results.h5, results.xdmf, checkpoint.h5.
+    pub out: PathBuf,
+    /// Threads for assembly and factorisation (overrides `[solver] threads`; 0 = all cores).
+    pub threads: Option<usize>,
+    /// No progress: [`Reporter::steps_begin`], [`Reporter::step`], [`Reporter::steps_end`]
+    /// are not called (the other lines are).
+    pub quiet: bool,
+    /// Draw the plots at the end (pressure.png/.svg, snapshot_step_N.png).
+    pub plots: bool,
+    /// Continue from the checkpoint in this folder (its checkpoint.h5, or the file itself).
+    pub restart: Option<PathBuf>,
+    /// Restart even when the case is not the one the checkpoint was written with.
+    pub allow_case_change: bool,
+    /// Read after every step: non-zero (the binary stores the number of the signal received)
+    /// writes a checkpoint and stops the run ("interrupted by SIGTERM").
+    pub stop: Option<Arc<AtomicUsize>>,
+}
+
+impl RunOptions {
+    /// Into `out`, with plots, progress, no restart, no stop flag.
+    pub fn new(out: impl Into<PathBuf>) -> Self {
+        Self { out: out.into(), threads: None, quiet: false, plots: true, restart: None, allow_case_change: false, stop: None }
+    }
+}
+
+/// How a run ended (the binary's exit code: [`RunOutcome::exit_code`]).
+#[derive(Debug)]
+pub enum RunOutcome {
+    /// It reached its end (end time, target solid ratio, jammed): exit code 0.
+    Completed(RunSummary),
+    /// The stop flag stopped it after a step. `checkpoint`: that step's checkpoint was written
+    /// and `--restart` continues the run (exit code 3), or it could not be (exit code 1). (On
+    /// ranks other than 0, which write nothing, always true.)
+    Interrupted { summary: RunSummary, checkpoint: bool },
+    /// A step could not be solved; the results up to the last converged step are written
+    /// (exit code 1).
+    Failed(SolveError),
+    /// The case, the checkpoint or the two together are not usable; nothing was run (exit code
+    /// 2). The text is the one reported.
+    BadInput(String),
+}
+
+impl RunOutcome {
+    /// 0 completed, 1 failed (or interrupted without its checkpoint), 2 bad input, 3
+    /// interrupted with a checkpoint.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Self::Completed(_) => 0,
+            Self::Interrupted { checkpoint: true, .. } => 3,
+            Self::Interrupted { checkpoint: false, .. } | Self::Failed(_) => 1,
+            Self::BadInput(_) => 2,
+        }
+    }
+}
+
+/// The output could not be written (or the simulation not set up): the run stops at once.
+/// With MPI, on rank 0 alone (the caller ends the other ranks).
+#[derive(Debug, Error)]
+pub enum RunError {
+    #[error("cannot create output directory {}", dir.display())]
+    OutputDir {
+        dir: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot copy {} into {}", file.display(), to.display())]
+    CopyRunFile {
+        file: PathBuf,
+        to: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot {} {}/history.csv", if *continued { "continue" } else { "write" }, dir.display())]
+    History {
+        dir: PathBuf,
+        continued: bool,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot {} the results in {}", if *continued { "continue" } else { "write" }, dir.display())]
+    Results {
+        dir: PathBuf,
+        continued: bool,
+        #[source]
+        source: ResultsError,
+    },
+    #[error("cannot write {}/summary.json", dir.display())]
+    Summary {
+        dir: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Solver(#[from] SolveError),
+}
+
+/// An error and its causes on one line, `error: cause: cause of the cause`.
+pub fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text += &format!(": {c}");
+        cause = c.source();
+    }
+    text
+}
+
+/// What `mpfem check` tells of a case without running it: the size of its model and the
+/// quality of its meshes (over every body).
+#[derive(Clone, Copy, Debug)]
+pub struct CaseCheck {
+    pub n_nodes: usize,
+    pub n_elements: usize,
+    pub n_prescribed: usize,
+    pub n_loads: usize,
+    /// Smallest scaled Jacobian of any element (≤ 0: inverted).
+    pub min_scaled_jacobian: f64,
+    /// Largest longest-over-shortest edge ratio of any element.
+    pub max_aspect_ratio: f64,
+    pub n_inverted: usize,
+}
+
+/// Build the model of case `c` and measure its meshes ([`crate::mesh::quality::quality`]).
+///
+/// # Errors
+/// The model's error when the case does not make one.
+pub fn check(c: &Case) -> Result<CaseCheck, crate::model::ModelError> {
+    let m = Model::from_case(c)?;
+    let mut k = CaseCheck {
+        n_nodes: m.n_nodes(),
+        n_elements: m.elements.len(),
+        n_prescribed: m.loading.prescribed.len(),
+        n_loads: m.loading.loads.len(),
+        min_scaled_jacobian: f64::INFINITY,
+        max_aspect_ratio: 0.0,
+        n_inverted: 0,
+    };
+    for b in &m.bodies {
+        let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
+        k.min_scaled_jacobian = k.min_scaled_jacobian.min(q.min_scaled_jacobian);
+        k.max_aspect_ratio = k.max_aspect_ratio.max(q.max_aspect_ratio);
+        k.n_inverted += q.n_inverted;
+    }
+    Ok(k)
+}
+
+/// Which case file a run used: its path and the SHA-256 of its text (the version of the case
+/// that produced the results), for `summary.json` and the checkpoint.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CaseFile {
+    pub path: String,
+    pub sha256: String,
+}
+
+impl CaseFile {
+    /// `path` and the SHA-256 of its bytes (empty when it cannot be read).
+    pub fn describe(path: &Path) -> Self {
+        use sha2::Digest;
+        let sha256 = std::fs::read(path)
+            .map(|b| sha2::Sha256::digest(&b).iter().map(|x| format!("{x:02x}")).collect())
+            .unwrap_or_default();
+        Self { path: path.display().to_string(), sha256 }
+    }
+}
+
+/// The SHA-256 a checkpoint records for the case (the built-in default job has no file).
+pub fn case_hash(case_file: Option<&CaseFile>) -> String {
+    case_file.map_or_else(|| format!("built-in default job of mpfem {}", env!("CARGO_PKG_VERSION")), |c| c.sha256.clone())
+}
+
+/// The run's own state kept in a checkpoint (what the summary needs besides the solver).
+/// Serialised by field name: the names are those of the checkpoints written before (as the
+/// binary's `CliState`), which must still restart.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct RunState {
+    pub phi0: Option<f64>,
+    pub max_body_volume_error: f64,
+    pub curve: Vec<CurvePoint>,
+    /// Wall-clock time of the run so far (s), over its restarts.
+    pub wall_time_s: f64,
+    /// Time spent writing history.csv so far (s).
+    pub history_s: f64,
+    /// The checkpoints the run was continued from (for summary.json).
+    pub restarts: Vec<serde_json::Value>,
+}
+
+/// How far a run is, in [0, 1]: the larger of the time fraction and, with a target solid
+/// ratio, the fraction of the way from the initial to the target solid ratio
+/// (`solid = (φ₀, φ, φ_target)`).
+pub fn progress(time: f64, t_end: f64, solid: Option<(f64, f64, f64)>) -> f64 {
+    let by_time = if t_end > 0.0 { time / t_end } else { 0.0 };
+    let by_density = match solid {
+        Some((phi0, phi, target)) if target > phi0 => (phi - phi0) / (target - phi0),
+        _ => 0.0,
+    };
+    by_time.max(by_density).clamp(0.0, 1.0)
+}
+
+/// Copy the files a restarted run continues (history.csv, results.h5) from the checkpoint's
+/// folder into another output folder (nothing when they are the same folder).
+pub fn copy_run_files(from: &Path, to: &Path) -> Result<(), RunError> {
+    let same = match (from.canonicalize(), to.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same {
+        return Ok(());
+    }
+    for name in ["history.csv", "results.h5"] {
+        let (src, dst) = (from.join(name), to.join(name));
+        // (never a file onto itself, which would empty it)
+        let same_file = matches!((src.canonicalize(), dst.canonicalize()), (Ok(a), Ok(b)) if a == b);
+        if src.is_file() && !same_file {
+            std::fs::copy(&src, &dst).map_err(|source| RunError::CopyRunFile { file: src.clone(), to: to.to_path_buf(), source })?;
+        }
+    }
+    Ok(())
+}
+
+/// The name of the signal whose number the stop flag holds.
+fn signal_name(sig: usize) -> String {
+    match sig as i32 {
+        signal_hook::consts::SIGTERM => "SIGTERM".into(),
+        signal_hook::consts::SIGINT => "SIGINT".into(),
+        s => format!("signal {s}"),
+    }
+}
+
+/// Report `text` as an error (on rank 0) and return it as [`RunOutcome::BadInput`].
+fn bad_input(root: bool, reporter: &dyn Reporter, text: String) -> RunOutcome {
+    if root {
+        reporter.note(Note::Error, &text);
+    }
+    RunOutcome::BadInput(text)
+}
+
+/// The lines for a [`PlotReport`]'s pictures.
+pub fn report_plots(r: &PlotReport, reporter: &dyn Reporter) {
+    if r.written.is_empty() {
+        reporter.note(Note::Info, "no plots written");
+    } else {
+        let names: Vec<String> = r.written.iter().map(|p| p.display().to_string()).collect();
+        reporter.note(Note::Info, &format!("wrote plots {}", names.join(", ")));
+    }
+}
+
+/// The plots at the end of a run, from whatever the run wrote; failures are warnings.
+fn plots_after_run(out: &Path, reporter: &dyn Reporter) {
+    let req = PlotRequest::of_folders(&[out.to_path_buf()], &[], None, None);
+    match crate::plot::plot_results(&req) {
+        Ok(r) => {
+            for s in &r.skipped {
+                reporter.note(Note::Info, s);
+            }
+            report_plots(&r, reporter)
+        }
+        Err(e) => reporter.note(Note::Warning, &format!("plots: {e} (the results are written; `mpfem plot {}` redraws them)", out.display())),
+    }
+}
+
+/// Run case `c` into `opts.out` (or on from `opts.restart`), on every rank of `comm`.
+///
+/// `label` names the case in the lines reported (its path, or what it is); `case_file` is the
+/// file it was read from (its SHA-256 goes into the checkpoints and summary.json; `None` for
+/// the built-in default job). Rank 0 writes and reports; the other ranks solve along and stop
+/// after the same step.
+///
+/// # Errors
+/// [`RunError`] when the output cannot be written or the simulation not set up: nothing more
+/// is written, and with MPI the other ranks are not told (the caller ends them).
+pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOptions, comm: Arc<dyn Collective>, reporter: &dyn Reporter) -> Result<RunOutcome, RunError> {
+    let out = opts.out.as_path();
+    let root = comm.is_root();
+    if let Some(t) = opts.threads {
+        c.solver.threads = t;
+    }
+    if comm.size() > 1 && c.solver.threads == 0 {
+        // "every core" is shared by the ranks of a node (rank 0's gathered factorisation stays
+        // at its share: faer's sparse factorisations ran 1.4-1.5 times slower on 2 threads than
+        // on 1 here, `cargo bench --bench solve -- solve_205k_threads`)
+        let local = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE").or_else(|_| std::env::var("MPI_LOCALNRANKS")).ok().and_then(|v| v.parse::<usize>().ok()).unwrap_or(comm.size());
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        c.solver.threads = (cores / local.max(1)).max(1);
+    }
+    // the checkpoint to continue from, read before anything is written
+    let checkpoint = match &opts.restart {
+        None => None,
+        Some(p) => match Checkpoint::read(p) {
+            Ok(ck) => Some(ck),
+            Err(e) => return Ok(bad_input(root, reporter, format!("cannot restart: {e}"))),
+        },
+    };
+    let sha = case_hash(case_file.as_ref());
+    if let Some(ck) = &checkpoint {
+        if ck.case_sha256 != sha {
+            let case = case_file.as_ref().map_or_else(|| "the built-in default job".to_string(), |c| format!("the case file {}", c.path));
+            if !opts.allow_case_change {
+                let text = format!(
+                    "cannot restart: {case} (sha256 {sha}) is not the one the checkpoint {} was written with (sha256 {}); pass --allow-case-change to restart anyway",
+                    ck.path.display(),
+                    ck.case_sha256
+                );
+                return Ok(bad_input(root, reporter, text));
+            }
+            if root {
+                let text = format!(
+                    "{case} (sha256 {sha}) is not the one the checkpoint {} was written with (sha256 {}); restarting anyway (--allow-case-change)",
+                    ck.path.display(),
+                    ck.case_sha256
+                );
+                reporter.note(Note::Warning, &text);
+            }
+        }
+    }
+    if !root {
+        return run_rank(&c, comm, checkpoint);
+    }
+    std::fs::create_dir_all(out).map_err(|source| RunError::OutputDir { dir: out.to_path_buf(), source })?;
+    let model = match Model::from_case(&c) {
+        Ok(m) => m,
+        Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
+    };
+    let formulation = format!("{:?}", c.formulation);
+    let n_nodes = model.n_nodes();
+    let n_elements = model.elements.len();
+    let n_bodies = model.bodies.len();
+    let title = c.title.clone();
+    let started = Instant::now();
+    let ranks = comm.size();
+    let (mut sim, resumed) = match checkpoint {
+        None => (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None),
+        Some(ck) => {
+            let (step, time, path) = (ck.step, ck.time, ck.path.clone());
+            let state: RunState = match ck.run_state() {
+                Ok(s) => s,
+                Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
+            };
+            let from = match path.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            let sim = match ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)) {
+                Ok(s) => s,
+                Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
+            };
+            copy_run_files(&from, out)?;
+            reporter.note(Note::Info, &format!("restarting from {} at step {step}, t = {time} s", path.display()));
+            (sim, Some((step, time, path, state)))
+        }
+    };
+    let columns = crate::output::history_columns(&sim.model);
+    let every = c.output.every;
+    let (mut history, mut results) = match &resumed {
+        None => (
+            HistoryWriter::create(out, &sim.model).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: false, source })?,
+            match every {
+                0 => None,
+                every => Some(ResultsWriter::create(out, every, &columns).map_err(|source| RunError::Results { dir: out.to_path_buf(), continued: false, source })?),
+            },
+        ),
+        Some((step, ..)) => (
+            HistoryWriter::open_append(out, &sim.model, *step).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: true, source })?,
+            match every {
+                0 => None,
+                every => Some(ResultsWriter::open_append(out, every, &columns, *step).map_err(|source| RunError::Results { dir: out.to_path_buf(), continued: true, source })?),
+            },
+        ),
+    };
+    // pictures of an earlier run in the same folder would not match the new results
+    crate::plot::remove_old_plots(out);
+    let on_ranks = match ranks {
+        1 => String::new(),
+        _ if sim.solves_distributed() => format!(", {ranks} MPI ranks (solve distributed)"),
+        _ => format!(", {ranks} MPI ranks (solve on rank 0)"),
+    };
+    let start = format!(
+        "{label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
+        sim.n_free(),
+        sim.linear_solver_name(),
+        c.time.end
+    );
+    reporter.note(Note::Info, &start);
+
+    let t_end = c.time.end;
+    let target = c.stop.solid_ratio;
+    if !opts.quiet {
+        reporter.steps_begin();
+    }
+    let mut earlier = RunState::default();
+    if let Some((step, time, path, state)) = resumed {
+        earlier = state;
+        earlier.restarts.push(serde_json::json!({ "checkpoint": path.display().to_string(), "step": step, "time": time }));
+    }
+    let mut phi0: Option<f64> = earlier.phi0;
+    let mut max_body_volume_error = earlier.max_body_volume_error;
+    let mut history_s = earlier.history_s;
+    let wall_before = earlier.wall_time_s;
+    let restarts = earlier.restarts.clone();
+    // the pressure–density curve for the compaction-law fits: the mean pressure of the moving
+    // walls (of every loaded wall when none moves)
+    let loading = &sim.model.loading;
+    let pressing: Vec<usize> = loading.walls.iter().enumerate().filter(|&(w, _)| loading.wall_moves(w)).map(|(_, wall)| wall.side.index()).collect();
+    let mut curve: Vec<CurvePoint> = std::mem::take(&mut earlier.curve);
+    // checkpoints: every `checkpoint_every` steps, every `checkpoint_minutes`, and after the
+    // step in which the stop flag was set
+    let ckpt_every = c.output.checkpoint_every;
+    let ckpt_interval = (c.output.checkpoint_minutes > 0.0).then(|| Duration::try_from_secs_f64(60.0 * c.output.checkpoint_minutes).ok()).flatten();
+    let mut last_ckpt = Instant::now();
+    let mut ckpt_s = 0.0;
+    // (step of the last checkpoint written, whether the last attempt failed)
+    let mut ckpt_written: Option<usize> = None;
+    let mut ckpt_failed = false;
+    let mut io_error: Option<std::io::Error> = None;
+    let mut results_error: Option<ResultsError> = None;
+    // (after a restart: the checkpoint's last step, so that a run restarted at its end still
+    // writes its last step and final state)
+    let mut last_report: Option<StepReport> = sim.last_report().cloned();
+    let mut result = sim.run_controlled(&mut |s, r| {
+        last_report = Some(r.clone());
+        max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
+        if let Some(c) = &r.compaction {
+            let loaded: Vec<f64> = if pressing.is_empty() {
+                c.pressure.iter().copied().filter(|p| *p > 0.0).collect()
+            } else {
+                pressing.iter().map(|&k| c.pressure[k]).collect()
+            };
+            if !loaded.is_empty() && c.solid_ratio > 0.0 {
+                curve.push(CurvePoint { solid_ratio: c.solid_ratio, pressure: loaded.iter().sum::<f64>() / loaded.len() as f64 });
+            }
+        }
+        let t_out = Instant::now();
+        if let Err(e) = history.write(r) {
+            io_error.get_or_insert(e);
+        }
+        history_s += t_out.elapsed().as_secs_f64();
+        if let (Some(w), None) = (results.as_mut(), &results_error) {
+            if let Err(e) = w.observe(s, r) {
+                results_error = Some(e);
+            }
+        }
+        let phi = r.compaction.as_ref().map(|c| c.solid_ratio);
+        if phi0.is_none() {
+            // the first step's solid ratio stands in for the initial one (the first
+            // increment is small)
+            phi0 = phi;
+        }
+        let solid = match (phi0, phi, target) {
+            (Some(a), Some(b), Some(t)) => Some((a, b, t)),
+            _ => None,
+        };
+        if !opts.quiet {
+            let done = progress(r.time, t_end, solid);
+            reporter.step(&Progress { report: r, done, solid_ratio: phi, target, elapsed_s: started.elapsed().as_secs_f64() });
+        }
+        let signal = opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
+        if comm.size() > 1 {
+            // every rank stops after the same step: rank 0's flag decides (see `run_rank`)
+            let mut stop = [signal as f64];
+            comm.broadcast(&mut stop);
+        }
+        let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
+        if signal != 0 || due {
+            let t0 = Instant::now();
+            let state = RunState {
+                phi0,
+                max_body_volume_error,
+                curve: curve.clone(),
+                wall_time_s: wall_before + started.elapsed().as_secs_f64(),
+                history_s,
+                restarts: restarts.clone(),
+            };
+            match crate::checkpoint::write(out, s, &sha, &state) {
+                Ok(p) => {
+                    reporter.note(Note::Info, &format!("checkpoint at step {}, t = {:.6e} s: {}", r.step, r.time, p.display()));
+                    ckpt_written = Some(r.step);
+                    ckpt_failed = false;
+                }
+                Err(e) => {
+                    reporter.note(Note::Warning, &e.to_string());
+                    ckpt_failed = true;
+                }
+            }
+            last_ckpt = Instant::now();
+            ckpt_s += t0.elapsed().as_secs_f64();
+        }
+        if signal != 0 {
+            return ControlFlow::Break(format!("interrupted by {}", signal_name(signal)));
+        }
+        ControlFlow::Continue(())
+    });
+    if let Ok(s) = result.as_mut() {
+        s.wall_time_s += wall_before;
+    }
+    if !opts.quiet {
+        reporter.steps_end();
+    }
+    if let Some(e) = io_error {
+        reporter.note(Note::Warning, &format!("history.csv: {e}"));
+    }
+    // the last converged step is always in the results, also when the run failed after it
+    if let (Some(w), None) = (results.as_mut(), &results_error) {
+        if let Err(e) = w.finish(&sim, last_report.as_ref()) {
+            results_error = Some(e);
+        }
+    }
+    if let Some(e) = &results_error {
+        reporter.note(Note::Warning, &format!("results: {e}; the steps written before are readable"));
+    }
+    let (status, error, summary) = match &result {
+        Ok(s) if s.interrupted => ("interrupted", None, Some(s)),
+        Ok(s) => ("completed", None, Some(s)),
+        Err(e) => ("failed", Some(e.to_string()), None),
+    };
+    let last_step = summary.and_then(|s| s.last.as_ref());
+    let wall_time_s = wall_before + started.elapsed().as_secs_f64();
+    let output_s = history_s + ckpt_s + results.as_ref().map_or(0.0, |w| w.elapsed_s);
+    let file = SummaryFile {
+        mpfem_version: env!("CARGO_PKG_VERSION"),
+        title: &title,
+        case: case_file.as_ref().map(|c| serde_json::json!({ "path": c.path, "sha256": c.sha256 })),
+        status,
+        restarts,
+        error,
+        formulation,
+        n_bodies,
+        n_nodes,
+        n_elements,
+        wall_time_s,
+        final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
+        phases: Phases::split(&sim.timing(), output_s, wall_time_s),
+        fits: sim.initial_solid_ratio().filter(|_| !curve.is_empty()).map(|d0| {
+            let names = crate::plot::WALLS;
+            let of = if pressing.is_empty() { "every loaded wall".to_string() } else { pressing.iter().map(|&k| names[k]).collect::<Vec<_>>().join(", ") };
+            crate::fits::fit(&curve, d0, of)
+        }),
+        run: summary,
+        last_step,
+    };
+    let summary_path = write_summary(out, &file).map_err(|source| RunError::Summary { dir: out.to_path_buf(), source })?;
+    let outcome = match result {
+        Ok(s) if s.interrupted => {
+            let checkpoint = ckpt_written == Some(s.steps) && !ckpt_failed;
+            reporter.note(Note::Info, &format!("{} at t = {} s after {} steps; results up to it are in {}", s.stop_reason, s.final_time, s.steps, out.display()));
+            if checkpoint {
+                let again = match &case_file {
+                    Some(cf) => format!("mpfem run {} --out {} --restart {}", cf.path, out.display(), out.display()),
+                    None => format!("mpfem run --out {} --restart {}", out.display(), out.display()),
+                };
+                reporter.note(Note::Info, &format!("continue with: {again}"));
+            } else {
+                reporter.note(Note::Error, "the checkpoint of the last step could not be written");
+            }
+            RunOutcome::Interrupted { summary: s, checkpoint }
+        }
+        Ok(s) => {
+            let text = format!(
+                "completed ({}) t = {} s in {} steps, {} Newton iterations, {} cut-backs, {:.2} s wall; volume error {:.2e}",
+                s.stop_reason,
+                s.final_time,
+                s.steps,
+                s.newton_iterations,
+                s.cutbacks,
+                s.wall_time_s,
+                s.last.as_ref().map_or(0.0, |r| r.volume_error)
+            );
+            reporter.note(Note::Info, &text);
+            let text = match &results {
+                Some(w) => format!(
+                    "wrote {}, {}, {} ({} output steps, {:.2} s) and {}",
+                    history.path.display(),
+                    summary_path.display(),
+                    w.h5_path.display(),
+                    w.n_written(),
+                    w.elapsed_s,
+                    w.xdmf_path.display()
+                ),
+                None => format!("wrote {} and {}", history.path.display(), summary_path.display()),
+            };
+            reporter.note(Note::Info, &text);
+            RunOutcome::Completed(s)
+        }
+        Err(e) => {
+            reporter.note(Note::Error, &format!("the run stopped at t = {} s: {e}", sim.sol.time));
+            let text = match &results {
+                Some(w) => format!(
+                    "results up to the last converged step are in {}, {}, {} and {}",
+                    history.path.display(),
+                    summary_path.display(),
+                    w.h5_path.display(),
+                    w.xdmf_path.display()
+                ),
+                None => format!("results up to the last converged step are in {} and {}", history.path.display(), summary_path.display()),
+            };
+            reporter.note(Note::Info, &text);
+            RunOutcome::Failed(e)
+        }
+    };
+    // the results file is closed before the plots read it
+    drop(results);
+    drop(history);
+    // (a run stopped with its checkpoint ends at once: the batch system's grace period is short)
+    if opts.plots && outcome.exit_code() != 3 {
+        plots_after_run(out, reporter);
+    }
+    Ok(outcome)
+}
+
+/// Ranks 1..N of an MPI run: the same solve on the same model (from the same checkpoint on a
+/// restart), no output (rank 0 writes the results and reports); the stop after the stop flag
+/// is rank 0's decision, broadcast after every step.
+fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+    let model = match Model::from_case(c) {
+        Ok(m) => m,
+        Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
+    };
+    let mut sim = match checkpoint {
+        None => Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?,
+        Some(ck) => match ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)) {
+            Ok(s) => s,
+            Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
+        },
+    };
+    let result = sim.run_controlled(&mut |_, _| {
+        let mut stop = [0.0];
+        comm.broadcast(&mut stop);
+        if stop[0] != 0.0 {
+            ControlFlow::Break("interrupted on rank 0".into())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    Ok(match result {
+        Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
+        Ok(s) => RunOutcome::Completed(s),
+        Err(e) => RunOutcome::Failed(e),
+    })
+}
