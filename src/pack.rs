@@ -2,7 +2,7 @@
 //! the bodies they generate, written as a case file of their own (`packed.toml`) with a
 //! preview picture (`packing.png`).
 
-use crate::case::{self, Case};
+use crate::case::{self, BodySpec, Case, MaterialSpec, ShapeSpec};
 use crate::plot::PlotError;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -85,7 +85,7 @@ pub fn write_packing(case_path: &Path, c: &Case, out: &Path) -> Result<PackRepor
             }
         }
     }
-    let bodies: Vec<toml::Value> = c.bodies.iter().map(|b| toml::Value::Table(b.to_toml(&c.materials))).collect();
+    let bodies: Vec<toml::Value> = c.bodies.iter().map(|b| toml::Value::Table(body_table(b, &c.materials))).collect();
     table.insert("bodies".into(), toml::Value::Array(bodies));
     let body = toml::to_string(&table).map_err(PackError::Toml)?;
     std::fs::create_dir_all(out).map_err(|source| PackError::CreateDir { path: out.to_path_buf(), source })?;
@@ -113,4 +113,65 @@ pub fn write_packing(case_path: &Path, c: &Case, out: &Path) -> Result<PackRepor
     let png = out.join("packing.png");
     let preview = crate::plot::packing_png(&particles, &names, die, &title, &png);
     Ok(PackReport { particles: c.bodies.len(), area, solid_ratio, packed, png, preview })
+}
+
+/// A validated body as a `[[bodies]]` table of the case file (material by name), such that
+/// parsing it gives this body back.
+pub fn body_table(body: &BodySpec, materials: &[MaterialSpec]) -> toml::Table {
+    let mut t = toml::Table::new();
+    t.insert("name".into(), body.name.clone().into());
+    let material = materials.get(body.material).map_or_else(String::new, |m| m.name.clone());
+    t.insert("material".into(), material.into());
+    // a gmsh body's element size comes from its mesh (mesh_size is not allowed there)
+    if !matches!(body.shape, ShapeSpec::Gmsh { .. }) {
+        t.insert("mesh_size".into(), body.mesh_size.into());
+    }
+    if let Some([a, b]) = body.divisions {
+        t.insert("divisions".into(), toml::Value::Array(vec![(a as i64).into(), (b as i64).into()]));
+    }
+    t.insert("shape".into(), toml::Value::Table(shape_table(&body.shape)));
+    t
+}
+
+/// The `shape = { type = ..., ... }` table of the case file.
+pub fn shape_table(shape: &ShapeSpec) -> toml::Table {
+    let pair = |p: [f64; 2]| toml::Value::Array(vec![p[0].into(), p[1].into()]);
+    let mut t = toml::Table::new();
+    t.insert("type".into(), shape.type_name().into());
+    match shape {
+        ShapeSpec::Rectangle { origin, size } => {
+            t.insert("origin".into(), pair(*origin));
+            t.insert("size".into(), pair(*size));
+        }
+        ShapeSpec::Disc { center, radius } => {
+            t.insert("center".into(), pair(*center));
+            t.insert("radius".into(), (*radius).into());
+        }
+        ShapeSpec::Ellipse { center, semi_axes, angle_deg } => {
+            t.insert("center".into(), pair(*center));
+            t.insert("semi_axes".into(), pair(*semi_axes));
+            t.insert("angle".into(), (*angle_deg).into());
+        }
+        ShapeSpec::Polygon { vertices } => {
+            t.insert("vertices".into(), toml::Value::Array(vertices.iter().map(|v| pair(*v)).collect()));
+        }
+        ShapeSpec::Cook => {}
+        ShapeSpec::AnnulusSector { center, inner_radius, outer_radius, angles_deg } => {
+            t.insert("center".into(), pair(*center));
+            t.insert("inner_radius".into(), (*inner_radius).into());
+            t.insert("outer_radius".into(), (*outer_radius).into());
+            t.insert("angles".into(), pair(*angles_deg));
+        }
+        ShapeSpec::Outline { vertices } => {
+            t.insert("vertices".into(), toml::Value::Array(vertices.iter().map(|v| pair(*v)).collect()));
+        }
+        ShapeSpec::Gmsh { file, group, scale, offset, .. } => {
+            // absolute (see Cx::gmsh_shape), so the table stays valid wherever it is written
+            t.insert("file".into(), file.display().to_string().into());
+            t.insert("group".into(), group.clone().into());
+            t.insert("scale".into(), (*scale).into());
+            t.insert("offset".into(), pair(*offset));
+        }
+    }
+    t
 }

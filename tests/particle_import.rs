@@ -217,7 +217,7 @@ fn gmsh_import_gives_one_body_per_physical_group() {
     assert_eq!(e.key, "bodies[0].shape.group");
     assert!(e.message.contains("grain_a, grain_b"), "{e}");
     // the packed case keeps the reference to the file and the group
-    let t = c.bodies[0].to_toml(&c.materials);
+    let t = mpfem::pack::body_table(&c.bodies[0], &c.materials);
     let shape = t["shape"].as_table().unwrap();
     assert_eq!(shape["type"].as_str(), Some("gmsh"));
     assert_eq!(shape["group"].as_str(), Some("grain_b"));

@@ -21,7 +21,8 @@
 //! [`crate::contact::ContactParams`], the [`crate::stabilise::StabilisationParams`], the
 //! solver's [`TimeSpec`] and [`SolverSpec`]); no module of the physics imports this one. The
 //! generators (`[[grids]]`, `[[packings]]`, `[[imports]]`) are validated in module `expand` and
-//! run by [`crate::packing`] and [`crate::mesh::import`].
+//! run by [`crate::packing`] and [`crate::mesh::import`]; writing a case back (`mpfem pack`) is
+//! [`crate::pack`]'s.
 
 use std::path::{Path, PathBuf};
 
@@ -31,7 +32,6 @@ mod build;
 mod expand;
 mod raw;
 mod validate;
-mod write;
 
 pub use build::mesh_body;
 use validate::{toml_error, Cx, Locator};
