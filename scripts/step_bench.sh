@@ -7,8 +7,9 @@
 #   bash scripts/step_bench.sh OLD NEW [REPEAT] [JOB...]
 #
 # OLD, NEW: mpfem binaries (release builds). REPEAT: runs of each binary per job (default 5).
-# JOBs: case files (default: a 4 x 4 disc grid with friction 0.2, 2 mm mesh, 20 steps, and
-# jobs/mpi/octagons_8x8_bench.toml, 64 asphalt octagons with the smoothed normal, 30 steps).
+# JOBs: case files (default: jobs/mpi/discs_8x8_bench.toml, 64 J2 discs with friction 0.2, 51 712
+# dofs, 5 steps; jobs/mpi/octagons_8x8_bench.toml, 64 asphalt octagons with the smoothed
+# normal, 30 steps).
 # Run it on an otherwise idle machine: the ratio is only as good as the machine is quiet.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,47 +25,7 @@ shift 2
 out=$(mktemp -d)
 jobs=("$@")
 if [ ${#jobs[@]} -eq 0 ]; then
-  cat >"$out/discs_4x4.toml" <<'EOF'
-title = "step benchmark: 4 x 4 elastic discs, friction 0.2"
-[[materials]]
-name = "m"
-model = "elastic"
-youngs_modulus = 64100.0
-poisson_ratio = 0.3
-[[grids]]
-material = "m"
-nx = 4
-ny = 4
-shape = "disc"
-solid_ratio = 0.76
-mesh_size = 2.0
-[[walls]]
-side = "left"
-position = 0.0
-velocity = 10.0
-[[walls]]
-side = "right"
-position = 100.0
-velocity = 10.0
-[[walls]]
-side = "bottom"
-position = 0.0
-velocity = 10.0
-[[walls]]
-side = "top"
-position = 100.0
-velocity = 10.0
-[contact]
-contact = "rubbing"
-friction = 0.2
-[time]
-end = 1.0
-dt = 0.05
-dt_max = 0.05
-[output]
-every = 0
-EOF
-  jobs=("$out/discs_4x4.toml" jobs/mpi/octagons_8x8_bench.toml)
+  jobs=(jobs/mpi/discs_8x8_bench.toml jobs/mpi/octagons_8x8_bench.toml)
 fi
 per_step() { # summary.json -> seconds per step
   python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print(s['wall_time_s'] / max(1, s['run']['steps']))" "$1"

@@ -115,7 +115,7 @@ fn write_h5(f: &hdf5::File, sim: &Simulation, st: &SimState, case_sha256: &str, 
     f.new_attr::<u32>().create("format_version")?.write_scalar(&FORMAT_VERSION)?;
     f.new_attr::<VarLenUnicode>().create("mpfem_version")?.write_scalar(&text(env!("CARGO_PKG_VERSION"))?)?;
     f.new_attr::<VarLenUnicode>().create("case_sha256")?.write_scalar(&text(case_sha256)?)?;
-    f.new_attr::<u64>().create("step")?.write_scalar(&(st.scalars.step as u64))?;
+    f.new_attr::<u64>().create("step")?.write_scalar(&(st.scalars.run.step as u64))?;
     f.new_attr::<f64>().create("time")?.write_scalar(&st.scalars.time)?;
     f.new_dataset::<u8>().shape(scalars.len()).create("scalars")?.write_raw(scalars)?;
     f.new_dataset::<u8>().shape(run.len()).create("run")?.write_raw(run)?;

@@ -595,8 +595,8 @@ fn contact_normal_is_segment_or_smoothed() {
 /// (which it would not change), naming the key and the value.
 #[test]
 fn viscous_retry_defaults_off_and_needs_inertial_springs() {
-    assert!(!parse(BASE).unwrap().contact.viscous_retry);
-    assert!(parse(&format!("{BASE}\n[contact]\nviscous_retry = true\n")).unwrap().contact.viscous_retry);
+    assert!(!parse(BASE).unwrap().stabilisation.viscous_retry);
+    assert!(parse(&format!("{BASE}\n[contact]\nviscous_retry = true\n")).unwrap().stabilisation.viscous_retry);
     let e = err_of(&format!("{BASE}\n[contact]\nstabilisation_kind = \"viscous\"\nviscous_retry = true\n"));
     assert_eq!(e.key, "contact.viscous_retry");
     assert_has(&e, &["value true", "stabilisation_kind = \"inertial\""]);

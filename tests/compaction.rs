@@ -86,3 +86,55 @@ fn cohering_discs_stay_in_contact_when_pushed_fast() {
     let last = reports.last().unwrap().compaction.as_ref().unwrap();
     assert!(last.pressure[0] > 10.0, "left wall at the end: {} MPa", last.pressure[0]);
 }
+
+/// A wall may move by a `travel` times an amplitude, as a prescribed displacement does
+/// (`loading`): with the ramp amplitude over the run, `travel = v · t_end` is the wall at
+/// constant speed v, so the single-disc lateral run with its walls given either way has the same
+/// history to round-off (wall pressures within 1e-9 relative; the positions differ by the
+/// rounding of v·t against travel·t/t_end). A table amplitude that holds the walls after half
+/// the travel stops the compaction there: the solid ratio stays put while the walls hold.
+#[test]
+fn walls_move_by_a_travel_times_an_amplitude() {
+    let base = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml")
+        .unwrap()
+        .replace("nx = 2", "nx = 1")
+        .replace("ny = 2", "ny = 1")
+        .replace("solid_ratio = 0.95", "solid_ratio = 0.85");
+    let c = case::parse(&base, std::path::Path::new("jobs/compaction")).unwrap();
+    let t_end = c.time.end;
+    let travel = format!("travel = {}", 10.0 * t_end);
+    let ramp = base.replace("velocity = 10.0", &travel);
+    assert_ne!(ramp, base, "the job's walls move at 10 mm/s");
+    let (a, sa) = run(&base);
+    let (b, sb) = run(&ramp);
+    assert_eq!((sa.steps, sa.stop_reason.as_str()), (sb.steps, sb.stop_reason.as_str()));
+    for (ra, rb) in a.iter().zip(&b) {
+        let (ca, cb) = (ra.compaction.as_ref().unwrap(), rb.compaction.as_ref().unwrap());
+        assert!((ca.solid_ratio - cb.solid_ratio).abs() < 1e-12, "step {}: {} vs {}", ra.step, ca.solid_ratio, cb.solid_ratio);
+        for k in 0..4 {
+            let scale = ca.pressure[k].abs().max(1.0);
+            assert!((ca.pressure[k] - cb.pressure[k]).abs() < 1e-9 * scale, "step {} wall {k}: {} vs {}", ra.step, ca.pressure[k], cb.pressure[k]);
+        }
+    }
+    // press by 5 % of the die's width in the first quarter of the run, then hold
+    let hold = base.replace("velocity = 10.0", &format!("travel = {}\namplitude = [[0.0, 0.0], [{}, 1.0]]", 0.05 * 100.0 / 2.0, 0.25 * t_end));
+    let model = Model::from_case(&case::parse(&hold, std::path::Path::new("jobs/compaction")).unwrap()).unwrap();
+    let l = &model.loading;
+    assert_eq!(l.wall_position(0, 0.25 * t_end), l.wall_position(0, t_end));
+    let (h, _) = run(&hold);
+    let late: Vec<f64> = h.iter().filter(|r| r.time > 0.3 * t_end).map(|r| r.compaction.as_ref().unwrap().solid_ratio).collect();
+    assert!(late.len() > 2, "steps after the walls stop: {}", late.len());
+    assert!(late.windows(2).all(|w| (w[1] - w[0]).abs() < 1e-12), "the solid ratio moves while the walls hold: {late:?}");
+}
+
+/// Bad wall motions are refused, naming the key and what was expected.
+#[test]
+fn wall_travel_errors_name_the_key() {
+    let base = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
+    let both = base.replacen("velocity = 10.0", "velocity = 10.0\ntravel = 5.0", 1);
+    let e = case::parse(&both, std::path::Path::new("jobs/compaction")).unwrap_err().to_string();
+    assert!(e.starts_with("walls[0].travel: given with velocity = 10"), "{e}");
+    let amp = base.replacen("velocity = 10.0", "velocity = 10.0\namplitude = \"constant\"", 1);
+    let e = case::parse(&amp, std::path::Path::new("jobs/compaction")).unwrap_err().to_string();
+    assert!(e.starts_with("walls[0].amplitude: value \"constant\": an amplitude shapes a wall's travel"), "{e}");
+}

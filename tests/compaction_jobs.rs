@@ -254,7 +254,7 @@ fn octagons_hitting_at_rest_need_the_viscous_retry() {
     assert!(ratio < 0.01, "stabilisation work {ratio:.3e} of the external work");
 
     let mut c = case::load(std::path::Path::new("jobs/compaction/octagons_4x1_asphalt_impact.toml")).unwrap();
-    c.contact.viscous_retry = false;
+    c.stabilisation.viscous_retry = false;
     let model = Model::from_case(&c).unwrap();
     let mut sim = Simulation::new(model, c.time, c.solver).unwrap();
     let err = sim.run(&mut |_, _| {}).expect_err("without the retry the impact step must fail");
@@ -276,7 +276,7 @@ fn octagons_hitting_at_rest_need_the_viscous_retry() {
 fn a_snap_through_is_followed_when_the_springs_stiffen_on_cut_back() {
     let path = std::path::Path::new("tests/data/two_discs_snap.toml");
     let c = case::load(path).unwrap();
-    assert!(c.contact.stiffen_on_cutback);
+    assert!(c.stabilisation.stiffen_on_cutback);
     let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
     let summary = sim.run(&mut |_, _| {}).unwrap_or_else(|e| panic!("with stiffening: {e}"));
     assert!((sim.sol.time - 20.0).abs() < 1e-9, "stopped at t = {} s", sim.sol.time);
@@ -299,7 +299,7 @@ fn a_snap_through_is_followed_when_the_springs_stiffen_on_cut_back() {
     assert!(last.pressure.iter().all(|p| p.abs() < 1e-9), "no wall is loaded at the end: {:?}", last.pressure);
 
     let mut c = case::load(path).unwrap();
-    c.contact.stiffen_on_cutback = false;
+    c.stabilisation.stiffen_on_cutback = false;
     let mut sim = Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
     let err = sim.run(&mut |_, _| {}).expect_err("with fixed springs the snap must fail");
     let t = sim.sol.time;

@@ -3,11 +3,9 @@
 //! of the physics. This is where the case file stops.
 
 use super::{BodySpec, Case, ShapeSpec};
-use crate::contact::ContactParams;
 use crate::loading::{Amplitude, EdgeLoad, Loading, PrescribedDof, WallMotion, WallTravel};
 use crate::mesh::{shapes, Mesh};
 use crate::model::{Body, Model, ModelError, NodeGroup};
-use crate::stabilise::StabilisationParams;
 
 /// Mesh one body's shape at its mesh size / divisions.
 pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
@@ -36,37 +34,6 @@ pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
             )
         }
     })
-}
-
-impl Case {
-    /// The contact parameters of the model: the `[contact]` table, and each wall's contact kind.
-    pub fn contact_params(&self) -> ContactParams {
-        let c = &self.contact;
-        ContactParams {
-            method: c.method,
-            kind: c.kind,
-            walls: self.walls.iter().map(|w| w.kind).collect(),
-            penalty: c.penalty,
-            penetration_tol: c.penetration_tol,
-            max_augmentations: c.max_augmentations,
-            search_distance: c.search_distance,
-            lagrange_regularisation: c.lagrange_regularisation,
-            normal: c.normal,
-        }
-    }
-
-    /// The stabilisation parameters of the model (the springs' keys of `[contact]`).
-    pub fn stabilisation_params(&self) -> StabilisationParams {
-        let c = &self.contact;
-        StabilisationParams {
-            factor: c.stabilisation,
-            scope: c.stabilise,
-            kind: c.stabilisation_kind,
-            viscous_retry: c.viscous_retry,
-            stiffen_on_cutback: c.stiffen_on_cutback,
-            regularisation: c.regularisation,
-        }
-    }
 }
 
 impl Model {
@@ -184,8 +151,8 @@ impl Model {
             formulation: case.formulation,
             element: case.element,
             loading,
-            contact: case.contact_params(),
-            stabilisation: case.stabilisation_params(),
+            contact: case.contact.clone(),
+            stabilisation: case.stabilisation.clone(),
             stop: case.stop.clone(),
             remesh: case.remesh.clone(),
             materials: case.materials.iter().map(|m| m.material.clone()).collect(),

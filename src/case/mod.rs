@@ -36,14 +36,14 @@ mod validate;
 pub use build::mesh_body;
 use validate::{toml_error, Cx, Locator};
 
-pub use crate::contact::{ContactMethod, ContactNormal};
+pub use crate::contact::{ContactMethod, ContactNormal, ContactParams};
 pub use crate::element::Formulation;
 pub use crate::linalg::LinearChoice;
 pub use crate::loading::{Amplitude, LoadKind, WallSide};
 pub use crate::model::StopSpec;
 pub use crate::remesh::RemeshSpec;
 pub use crate::solver::{NewtonKind, SolverSpec, TimeSpec};
-pub use crate::stabilise::{StabilisationKind, Stabilise};
+pub use crate::stabilise::{StabilisationKind, StabilisationParams, Stabilise};
 
 use crate::linalg::LinearSolverKind;
 use crate::material::Material;
@@ -124,8 +124,11 @@ pub struct Case {
     pub output: OutputSpec,
     /// Rigid walls (empty: no walls).
     pub walls: Vec<WallSpec>,
-    /// Contact settings (used when there are walls or several bodies).
-    pub contact: ContactSpec,
+    /// Contact settings (used when there are walls or several bodies): the `[contact]` table,
+    /// and each wall's contact kind (`walls`, in the order of [`Case::walls`]).
+    pub contact: ContactParams,
+    /// The stabilisation springs (the springs' keys of `[contact]`).
+    pub stabilisation: StabilisationParams,
     pub stop: StopSpec,
     /// Adaptive re-meshing of the particles (`[remesh]`).
     pub remesh: RemeshSpec,
@@ -135,7 +138,8 @@ pub struct Case {
 
 /// A rigid straight wall: `position` (x of a left/right wall, y of a bottom/top wall, mm, at
 /// t = 0) moving towards the particles at `velocity` (mm/s, positive inward), or by `travel`
-/// (mm) times an amplitude (see [`crate::loading`]).
+/// (mm) times an amplitude (see [`crate::loading`]). Its contact kind with the particles is
+/// `contact.walls[i]` ([`Case::contact`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct WallSpec {
     pub side: WallSide,
@@ -144,69 +148,6 @@ pub struct WallSpec {
     pub velocity: f64,
     /// Inward travel (mm) and its amplitude, instead of a constant speed.
     pub travel: Option<(f64, Amplitude)>,
-    pub kind: crate::contact::ContactKind,
-}
-
-/// The `[contact]` table.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ContactSpec {
-    pub method: ContactMethod,
-    /// Contact kind between particles.
-    pub kind: crate::contact::ContactKind,
-    /// Normal and tangential penalty (MPa/mm); `None` = 10 E_min / h per pair.
-    pub penalty: Option<f64>,
-    /// Augmented Lagrangian: stop when the largest penetration <= this x the element size.
-    pub penetration_tol: f64,
-    pub max_augmentations: usize,
-    /// zeta: every free node is tied to its last converged position by a spring
-    /// zeta * E * a / h^2 (a tributary area, h element size), which keeps particles that touch
-    /// nothing solvable.
-    pub stabilisation: f64,
-    /// Which bodies and directions the stabilisation springs act on.
-    pub stabilise: Stabilise,
-    /// Where the stabilisation springs are anchored.
-    pub stabilisation_kind: StabilisationKind,
-    /// Retry a step that fails with the inertial anchor at the same size with the viscous one
-    /// before cutting back.
-    pub viscous_retry: bool,
-    /// On a step smaller than `[time] dt` the springs stiffen as a fixed nodal mass (inertial
-    /// anchor: by (dt/Δt)²) or a fixed dashpot (viscous anchor: by dt/Δt) would, so that a
-    /// cut-back in general ends where the springs outweigh a loss of stability of the particles
-    /// (a snap-through between two interlocked corners, a buckling column).
-    pub stiffen_on_cutback: bool,
-    /// rho: a spring rho * E * a / h^2 added to the tangent only (not to the residual): it
-    /// steadies the Newton iterations of weakly held particles without changing the solution
-    /// or dissipating energy.
-    pub regularisation: f64,
-    /// Search distance (mm); `None` = one element size.
-    pub search_distance: Option<f64>,
-    /// Lagrange multipliers: an active constraint is g + r λ / c = 0 (c the default penalty),
-    /// a perturbed Lagrangian that keeps the system regular where two candidates constrain the
-    /// same gap (a node facing a node, symmetric ties). 0 = exact constraints.
-    pub lagrange_regularisation: f64,
-    /// Contact normal of the node-to-segment pairs: straight segments or a smoothed surface.
-    pub normal: ContactNormal,
-}
-
-impl Default for ContactSpec {
-    fn default() -> Self {
-        Self {
-            method: ContactMethod::Penalty,
-            kind: crate::contact::ContactKind::Sliding,
-            penalty: None,
-            penetration_tol: 0.01,
-            max_augmentations: 20,
-            stabilisation: 1e-5,
-            stabilise: Stabilise::All,
-            stabilisation_kind: StabilisationKind::Inertial,
-            viscous_retry: false,
-            stiffen_on_cutback: false,
-            regularisation: 0.0,
-            search_distance: None,
-            lagrange_regularisation: 1e-4,
-            normal: ContactNormal::default(),
-        }
-    }
 }
 
 /// A named material.
@@ -409,10 +350,10 @@ impl Case {
     /// the model's tangent ([`crate::model::symmetric_tangent`], the one place that decides it).
     pub fn linear_kind(&self) -> LinearSolverKind {
         let follower = self.loads.iter().any(|l| matches!(l.kind, LoadKind::Pressure(_)));
-        let contact = self.contact_params();
+        let contact = &self.contact;
         let has_contact = !self.walls.is_empty() || self.bodies.len() > 1;
         let materials = self.bodies.iter().filter_map(|b| self.materials.get(b.material)).map(|m| &m.material);
-        let symmetric = crate::model::symmetric_tangent(materials, follower, has_contact.then_some((&contact, self.bodies.len())));
+        let symmetric = crate::model::symmetric_tangent(materials, follower, has_contact.then_some((contact, self.bodies.len())));
         self.solver.linear.resolve(symmetric)
     }
 

@@ -294,10 +294,14 @@ impl Cx<'_> {
 
         let raw_walls = r.walls.unwrap_or_default();
         let mut walls = Vec::with_capacity(raw_walls.len());
+        let mut wall_kinds = Vec::with_capacity(raw_walls.len());
         for (i, w) in raw_walls.into_iter().enumerate() {
-            walls.push(self.wall(&format!("walls[{i}]"), w)?);
+            let (wall, kind) = self.wall(&format!("walls[{i}]"), w)?;
+            walls.push(wall);
+            wall_kinds.push(kind);
         }
-        let contact = self.contact(r.contact)?;
+        let (mut contact, stabilisation) = self.contact(r.contact)?;
+        contact.walls = wall_kinds;
         if contact.method == ContactMethod::Lagrange {
             use crate::contact::ContactKind;
             if !matches!(contact.kind, ContactKind::Sliding) {
@@ -306,7 +310,7 @@ impl Cx<'_> {
                     "value \"lagrange\": Lagrange multipliers are implemented for frictionless contact only; expected contact.contact = \"sliding\" or method = \"augmented_lagrangian\" (which also ties and rubs)",
                 ));
             }
-            if let Some(i) = walls.iter().position(|w| !matches!(w.kind, ContactKind::Sliding)) {
+            if let Some(i) = contact.walls.iter().position(|k| !matches!(k, ContactKind::Sliding)) {
                 return Err(self.err(
                     &format!("walls[{i}].contact"),
                     "Lagrange multipliers (contact.method = \"lagrange\") are implemented for frictionless contact only; expected \"sliding\" or method = \"augmented_lagrangian\"",
@@ -419,6 +423,7 @@ impl Cx<'_> {
             output,
             walls,
             contact,
+            stabilisation,
             stop,
             remesh,
             base_dir: self.base_dir.to_path_buf(),
@@ -1136,7 +1141,8 @@ impl Cx<'_> {
         })
     }
 
-    fn wall(&self, key: &str, w: raw::WallRaw) -> Result<WallSpec, CaseError> {
+    /// A wall and its contact kind with the particles (which goes to [`Case::contact`]).
+    fn wall(&self, key: &str, w: raw::WallRaw) -> Result<(WallSpec, crate::contact::ContactKind), CaseError> {
         let side_s = self.req(w.side, &format!("{key}.side"), "one of \"left\", \"right\", \"bottom\", \"top\"")?;
         let side = match self.choice(&format!("{key}.side"), &side_s, &["left", "right", "bottom", "top"])? {
             "left" => WallSide::Left,
@@ -1169,12 +1175,12 @@ impl Cx<'_> {
             }
         };
         let kind = self.contact_kind(&format!("{key}.contact"), w.contact, w.friction)?;
-        Ok(WallSpec { side, position, velocity, travel, kind })
+        Ok((WallSpec { side, position, velocity, travel }, kind))
     }
 
-    fn contact(&self, c: Option<raw::ContactRaw>) -> Result<ContactSpec, CaseError> {
-        let mut spec = ContactSpec::default();
-        let Some(c) = c else { return Ok(spec) };
+    fn contact(&self, c: Option<raw::ContactRaw>) -> Result<(ContactParams, StabilisationParams), CaseError> {
+        let (mut spec, mut stab) = (ContactParams::default(), StabilisationParams::default());
+        let Some(c) = c else { return Ok((spec, stab)) };
         if let Some(m) = c.method {
             spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian", "lagrange"])? {
                 "penalty" => ContactMethod::Penalty,
@@ -1193,31 +1199,31 @@ impl Cx<'_> {
             spec.max_augmentations = self.count("contact.max_augmentations", v, 1)?;
         }
         if let Some(v) = c.stabilisation {
-            spec.stabilisation = self.num("contact.stabilisation", v, v >= 0.0, "a stabilisation factor >= 0")?;
+            stab.factor = self.num("contact.stabilisation", v, v >= 0.0, "a stabilisation factor >= 0")?;
         }
         if let Some(v) = c.stabilise {
-            spec.stabilise = match self.choice("contact.stabilise", &v, &["unsupported", "all"])? {
+            stab.scope = match self.choice("contact.stabilise", &v, &["unsupported", "all"])? {
                 "all" => Stabilise::All,
                 _ => Stabilise::Unsupported,
             };
         }
         if let Some(v) = c.stabilisation_kind {
-            spec.stabilisation_kind = match self.choice("contact.stabilisation_kind", &v, &["inertial", "viscous"])? {
+            stab.kind = match self.choice("contact.stabilisation_kind", &v, &["inertial", "viscous"])? {
                 "viscous" => StabilisationKind::Viscous,
                 _ => StabilisationKind::Inertial,
             };
         }
         if let Some(v) = c.viscous_retry {
-            if v && spec.stabilisation_kind != StabilisationKind::Inertial {
+            if v && stab.kind != StabilisationKind::Inertial {
                 return Err(self.err("contact.viscous_retry", "value true: the springs are viscous already; expected viscous_retry only with stabilisation_kind = \"inertial\""));
             }
-            spec.viscous_retry = v;
+            stab.viscous_retry = v;
         }
         if let Some(v) = c.stiffen_on_cutback {
-            spec.stiffen_on_cutback = v;
+            stab.stiffen_on_cutback = v;
         }
         if let Some(v) = c.regularisation {
-            spec.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;
+            stab.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;
         }
         if let Some(v) = c.lagrange_regularisation {
             spec.lagrange_regularisation =
@@ -1232,7 +1238,7 @@ impl Cx<'_> {
         if let Some(v) = c.search_distance {
             spec.search_distance = if v == 0.0 { None } else { Some(self.positive("contact.search_distance", v, "a distance in mm (0 = one element size)")?) };
         }
-        Ok(spec)
+        Ok((spec, stab))
     }
 
     /// Particles (bodies) must not overlap: the first overlapping pair is an error at the

@@ -218,14 +218,16 @@ impl Multipliers {
     }
 }
 
-/// One node-to-segment pair as evaluated by the process that owns its slave node: what every
-/// process needs to add it (the tangent block goes separately, to the solving process).
+/// One pair as evaluated by the process that owns its slave node: what every process needs to
+/// add it (the tangent block goes separately, to the solving process). `N` is the width of its
+/// force: [`NDOF`] for node-to-segment pairs (the first [`Boundary::pair_width`] entries used),
+/// 2 for node-to-wall pairs.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PairEval {
-    /// Index of the frozen pair.
-    pub pair: usize,
-    /// The contribution to the internal force (the first [`Boundary::pair_width`] entries).
-    pub f: [f64; NDOF],
+pub struct Eval<const N: usize> {
+    /// The frozen pair's index, or `wall · n_slaves + slave` for a wall pair.
+    pub key: usize,
+    /// The contribution to the internal force.
+    pub f: [f64; N],
     pub gap: f64,
     pub pressure: f64,
     pub violation: f64,
@@ -236,21 +238,11 @@ pub struct PairEval {
     pub aug: PairHistory,
 }
 
-/// One node-to-wall pair as evaluated by its owner (only pairs that are active or carry a
-/// history; every other pair is open with default histories).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WallEval {
-    /// `wall · n_slaves + slave`.
-    pub key: usize,
-    pub f: [f64; 2],
-    pub gap: f64,
-    pub pressure: f64,
-    pub violation: f64,
-    pub slip: bool,
-    pub active: bool,
-    pub trial: PairHistory,
-    pub aug: PairHistory,
-}
+/// A node-to-segment evaluation.
+pub type PairEval = Eval<NDOF>;
+/// A node-to-wall evaluation (only pairs that are active or carry a history; every other pair
+/// is open with default histories).
+pub type WallEval = Eval<2>;
 
 /// The evaluations of one process (or of all, concatenated in process order): see
 /// [`ContactProblem::evaluate`].
@@ -645,7 +637,7 @@ impl ContactProblem {
                 (r.gap, r.pressure, r.shear, r.slip, r.active, r.new_history, enforce::augment(&r))
             };
             let violation = if active { enforce::violation(kind, gap, shear, slip, &old, params.eps_t) } else { 0.0 };
-            out.pairs.push(PairEval { pair: k, f, gap, pressure, violation, slip, active, trial, aug });
+            out.pairs.push(PairEval { key: k, f, gap, pressure, violation, slip, active, trial, aug });
         }
         let ns = b.slaves.len();
         let mut wall_gap = vec![f64::NAN; ns];
@@ -709,7 +701,7 @@ impl ContactProblem {
         // position of each pair's evaluation and tangent block
         let mut at = vec![usize::MAX; npairs];
         for (pos, r) in evals.pairs.iter().enumerate() {
-            at[r.pair] = pos;
+            at[r.key] = pos;
         }
         let mut at_k = vec![usize::MAX; if tangent.is_some() { npairs } else { 0 }];
         if tangent.is_some() {

@@ -49,7 +49,7 @@
 pub use crate::comm::{launch, Collective, Serial};
 
 use crate::assembly::{AssemblyError, ElementFields};
-use crate::contact::problem::{PairEval, WallEval};
+use crate::contact::problem::Eval;
 use crate::contact::{ContactEvals, PairHistory};
 use crate::element::N_ENH;
 use crate::material::{MatState, MaterialError};
@@ -277,20 +277,9 @@ impl Distribution {
     /// width (6 or 10 dofs).
     pub fn gather_contact(&self, local: &ContactEvals, tangent: bool, width: usize) -> ContactEvals {
         let mut out = ContactEvals::default();
-        let mut buf = Vec::new();
-        for e in &local.pairs {
-            write_pair(e, &mut buf);
-        }
-        out.pairs = self.comm.all_gather_varcount(&buf).chunks_exact(PAIR_WIDTH).map(read_pair).collect();
-        buf.clear();
-        for e in &local.walls {
-            write_wall(e, &mut buf);
-        }
-        out.walls = self.comm.all_gather_varcount(&buf).chunks_exact(WALL_WIDTH).map(read_wall).collect();
-        buf.clear();
-        for &(i, g) in &local.gaps {
-            buf.extend_from_slice(&[i as f64, g]);
-        }
+        out.pairs = all_gather_evals(self.comm.as_ref(), &local.pairs);
+        out.walls = all_gather_evals(self.comm.as_ref(), &local.walls);
+        let buf: Vec<f64> = local.gaps.iter().flat_map(|&(i, g)| [i as f64, g]).collect();
         out.gaps = self.comm.all_gather_varcount(&buf).chunks_exact(2).map(|r| (r[0] as usize, r[1])).collect();
         if tangent {
             let indices = |v: &[usize]| v.iter().map(|&k| k as f64).collect::<Vec<f64>>();
@@ -304,12 +293,6 @@ impl Distribution {
     }
 }
 
-/// Values of a node-to-segment evaluation in an exchange: pair index, force (10), gap,
-/// pressure, violation, slip, active, trial history (4), augmented history (4).
-const PAIR_WIDTH: usize = 1 + crate::contact::smooth::NDOF + 5 + 8;
-/// Values of a node-to-wall evaluation: key, force (2), the same scalars and histories.
-const WALL_WIDTH: usize = 1 + 2 + 5 + 8;
-
 fn put_history(v: &mut Vec<f64>, h: &PairHistory) {
     v.extend_from_slice(&[h.xi_stick, h.lambda_n, h.lambda_t, f64::from(u8::from(h.active))]);
 }
@@ -318,35 +301,33 @@ fn get_history(v: &[f64]) -> PairHistory {
     PairHistory { xi_stick: v[0], lambda_n: v[1], lambda_t: v[2], active: v[3] != 0.0 }
 }
 
-fn flag(b: bool) -> f64 {
-    f64::from(u8::from(b))
+/// Values of a contact evaluation with a force of width N in an exchange: key, force (N),
+/// gap, pressure, violation, slip, active, trial history (4), augmented history (4).
+const fn eval_width(n: usize) -> usize {
+    1 + n + 5 + 8
 }
 
-fn write_pair(e: &PairEval, v: &mut Vec<f64>) {
-    v.push(e.pair as f64);
+fn write_eval<const N: usize>(e: &Eval<N>, v: &mut Vec<f64>) {
+    v.push(e.key as f64);
     v.extend_from_slice(&e.f);
+    let flag = |b: bool| f64::from(u8::from(b));
     v.extend_from_slice(&[e.gap, e.pressure, e.violation, flag(e.slip), flag(e.active)]);
     put_history(v, &e.trial);
     put_history(v, &e.aug);
 }
 
-fn read_pair(r: &[f64]) -> PairEval {
-    const N: usize = crate::contact::smooth::NDOF;
+fn read_eval<const N: usize>(r: &[f64]) -> Eval<N> {
     let mut f = [0.0; N];
     f.copy_from_slice(&r[1..1 + N]);
     let s = &r[1 + N..];
-    PairEval { pair: r[0] as usize, f, gap: s[0], pressure: s[1], violation: s[2], slip: s[3] != 0.0, active: s[4] != 0.0, trial: get_history(&s[5..9]), aug: get_history(&s[9..13]) }
+    Eval { key: r[0] as usize, f, gap: s[0], pressure: s[1], violation: s[2], slip: s[3] != 0.0, active: s[4] != 0.0, trial: get_history(&s[5..9]), aug: get_history(&s[9..13]) }
 }
 
-fn write_wall(e: &WallEval, v: &mut Vec<f64>) {
-    v.push(e.key as f64);
-    v.extend_from_slice(&e.f);
-    v.extend_from_slice(&[e.gap, e.pressure, e.violation, flag(e.slip), flag(e.active)]);
-    put_history(v, &e.trial);
-    put_history(v, &e.aug);
-}
-
-fn read_wall(r: &[f64]) -> WallEval {
-    let s = &r[3..];
-    WallEval { key: r[0] as usize, f: [r[1], r[2]], gap: s[0], pressure: s[1], violation: s[2], slip: s[3] != 0.0, active: s[4] != 0.0, trial: get_history(&s[5..9]), aug: get_history(&s[9..13]) }
+/// Every process's evaluations, concatenated in process order, on every process.
+fn all_gather_evals<const N: usize>(comm: &dyn Collective, local: &[Eval<N>]) -> Vec<Eval<N>> {
+    let mut buf = Vec::with_capacity(local.len() * eval_width(N));
+    for e in local {
+        write_eval(e, &mut buf);
+    }
+    comm.all_gather_varcount(&buf).chunks_exact(eval_width(N)).map(read_eval).collect()
 }

@@ -37,7 +37,7 @@ mod system;
 
 pub use params::{NewtonKind, SolverSpec, TimeSpec};
 pub use report::{Clock, Compaction, Phase, PhaseScope, RunSummary, StepReport, Timing};
-pub use state::{PartitionTotals, SimScalars, SimState, Solution};
+pub use state::{PartitionTotals, RunState, SimScalars, SimState, Solution};
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
 use crate::comm::{Collective, Serial};
@@ -48,7 +48,6 @@ use crate::material::ConstitutiveLaw;
 use crate::model::Model;
 use crate::parallel::{Distribution, PartitionStats};
 use crate::stabilise::Springs;
-use state::RunState;
 use std::sync::Arc;
 use system::{System, TermMaps};
 use thiserror::Error;
@@ -99,6 +98,8 @@ pub struct Simulation {
     pub sol: Solution,
     /// Counters, energies and the step-size control between steps.
     run: RunState,
+    /// u_{n−1}: the predictor's and the inertial stabilisation's previous displacement.
+    u_prev: Vec<f64>,
     /// The global system: assembler, pattern, matrix, vectors, linear solver, processes.
     sys: System,
     /// Volumetric data per element: the bulk modulus κ (or the augmented-Lagrangian penalty of
@@ -238,7 +239,6 @@ impl Simulation {
             total_iterations: 0,
             total_cutbacks: 0,
             total_remeshes: 0,
-            u_prev: vec![0.0; n_dofs],
             area0_body,
             area0_total,
             force_floor,
@@ -253,6 +253,7 @@ impl Simulation {
             spec,
             sol,
             run,
+            u_prev: vec![0.0; n_dofs],
             sys,
             kappa,
             incompressible,
@@ -287,28 +288,16 @@ impl Simulation {
         SimState {
             scalars: SimScalars {
                 time: self.sol.time,
-                step: self.run.step,
-                dt_prev: self.run.dt_prev,
-                next_dt: self.run.next_dt,
-                total_iterations: self.run.total_iterations,
-                total_cutbacks: self.run.total_cutbacks,
-                total_remeshes: self.run.total_remeshes,
+                run: self.run.clone(),
                 stab_all: self.springs.all,
                 stab_viscous: self.springs.viscous,
                 stab_energy: self.springs.energy,
-                work_ext: self.run.work_ext,
-                last_wall_force: self.run.last_wall_force.clone(),
-                area0_body: self.run.area0_body.clone(),
-                area0_total: self.run.area0_total,
-                force_floor: self.run.force_floor,
                 timing: self.clock.timing(),
-                remesh_baseline: self.run.remesh_baseline.clone(),
-                last_report: self.run.last_report.clone(),
                 contact: self.contact.as_ref().map(|c| c.state()),
                 partition: PartitionTotals { repartitions: self.sys.partition.repartitions, kept: self.sys.partition.kept, moved: self.sys.partition.moved, time_s: self.sys.partition.time_s },
             },
             sol: self.sol.clone(),
-            u_prev: self.run.u_prev.clone(),
+            u_prev: self.u_prev.clone(),
             dynamics: self.dynamics.as_ref().map(|d| [d.u.clone(), d.v.clone(), d.a.clone(), d.g.clone()]),
         }
     }
@@ -332,9 +321,9 @@ impl Simulation {
         check("element pressures", sol.fields.pressure.len(), ne)?;
         check("element volume ratios", sol.fields.theta.len(), ne)?;
         check("element enhanced modes", sol.fields.alpha.len(), ne)?;
-        check("body areas", s.area0_body.len(), nb)?;
-        check("re-mesh baselines", s.remesh_baseline.len(), nb)?;
-        check("wall forces", s.last_wall_force.len(), self.run.last_wall_force.len())?;
+        check("body areas", s.run.area0_body.len(), nb)?;
+        check("re-mesh baselines", s.run.remesh_baseline.len(), nb)?;
+        check("wall forces", s.run.last_wall_force.len(), self.run.last_wall_force.len())?;
         match (self.contact.as_mut(), s.contact) {
             (Some(c), Some(cs)) => c.set_state(cs)?,
             (None, None) => {}
@@ -352,24 +341,12 @@ impl Simulation {
         }
         self.sol = sol;
         self.sol.time = s.time;
-        self.run.u_prev = u_prev;
-        self.run.step = s.step;
-        self.run.dt_prev = s.dt_prev;
-        self.run.next_dt = s.next_dt;
-        self.run.total_iterations = s.total_iterations;
-        self.run.total_cutbacks = s.total_cutbacks;
-        self.run.total_remeshes = s.total_remeshes;
+        self.u_prev = u_prev;
+        self.run = s.run;
         self.springs.all = s.stab_all;
         self.springs.viscous = s.stab_viscous;
         self.springs.energy = s.stab_energy;
-        self.run.work_ext = s.work_ext;
-        self.run.last_wall_force = s.last_wall_force;
-        self.run.area0_body = s.area0_body;
-        self.run.area0_total = s.area0_total;
-        self.run.force_floor = s.force_floor;
         self.clock.set(s.timing);
-        self.run.remesh_baseline = s.remesh_baseline;
-        self.run.last_report = s.last_report;
         // the run's counts so far; the current partition (on this run's processes) is this one's
         self.sys.partition.repartitions = s.partition.repartitions;
         self.sys.partition.kept = s.partition.kept;
@@ -425,7 +402,7 @@ impl Simulation {
         if self.run.step == 0 || !(self.run.dt_prev > 0.0) {
             return vec![0.0; self.sol.u.len()];
         }
-        self.sol.u.iter().zip(&self.run.u_prev).map(|(a, b)| (a - b) / self.run.dt_prev).collect()
+        self.sol.u.iter().zip(&self.u_prev).map(|(a, b)| (a - b) / self.run.dt_prev).collect()
     }
 
     /// Solid ratio of the initial configuration (particle area / die area at t = 0), when four

@@ -73,7 +73,7 @@ impl Simulation {
             lambda: pressure_like[e0..e0 + ne].to_vec(),
         };
         // the last step's increment u_n − u_{n−1} of the body goes to the new nodes too
-        let incr = crate::remesh::NodalField { n_comp: 2, values: (2 * n0..2 * (n0 + nn)).map(|d| self.sol.u[d] - self.run.u_prev[d]).collect() };
+        let incr = crate::remesh::NodalField { n_comp: 2, values: (2 * n0..2 * (n0 + nn)).map(|d| self.sol.u[d] - self.u_prev[d]).collect() };
         let mut moved = crate::remesh::transfer_body(&body.mesh, xb0, xb, &old_state, &[incr], &new_mesh).map_err(|e| fail(e.to_string()))?;
         let incr_new = moved.nodal.pop().ok_or_else(|| fail("the increment was not transferred".into()))?;
         if incompressible {
@@ -93,7 +93,7 @@ impl Simulation {
             if c == b {
                 for k in 0..nb.mesh.n_nodes() {
                     for d in 0..2 {
-                        next.run.u_prev[2 * (nb.node_offset + k) + d] = -incr_new.values[2 * k + d];
+                        next.u_prev[2 * (nb.node_offset + k) + d] = -incr_new.values[2 * k + d];
                     }
                 }
                 let r = nb.elem_offset..nb.elem_offset + nb.mesh.n_elements();
@@ -104,7 +104,7 @@ impl Simulation {
             }
             let (src, dst, n) = (2 * ob.node_offset, 2 * nb.node_offset, 2 * ob.mesh.n_nodes());
             next.sol.u[dst..dst + n].copy_from_slice(&self.sol.u[src..src + n]);
-            next.run.u_prev[dst..dst + n].copy_from_slice(&self.run.u_prev[src..src + n]);
+            next.u_prev[dst..dst + n].copy_from_slice(&self.u_prev[src..src + n]);
             let (src, dst, n) = (ob.elem_offset, nb.elem_offset, ob.mesh.n_elements());
             next.sol.fields.states[dst..dst + n].copy_from_slice(&self.sol.fields.states[src..src + n]);
             next.sol.fields.sig[dst..dst + n].copy_from_slice(&self.sol.fields.sig[src..src + n]);
@@ -127,21 +127,11 @@ impl Simulation {
             tracing::debug!(body = b, ?carried, "contact history carried over the re-mesh");
         }
         next.sol.time = self.sol.time;
-        next.run.dt_prev = self.run.dt_prev;
-        next.run.step = self.run.step;
-        next.run.total_iterations = self.run.total_iterations;
-        next.run.total_cutbacks = self.run.total_cutbacks;
+        // the run's counters, energies, step size and references go on (the volume error
+        // keeps the initial areas)
+        next.run = self.run.clone();
         next.springs.energy = self.springs.energy;
-        next.run.work_ext = self.run.work_ext;
-        next.run.last_wall_force.clone_from(&self.run.last_wall_force);
-        next.run.area0_body.clone_from(&self.run.area0_body);
-        next.run.area0_total = self.run.area0_total;
-        next.run.force_floor = self.run.force_floor;
         next.clock = self.clock.clone();
-        next.run.total_remeshes = self.run.total_remeshes;
-        next.run.remesh_baseline.clone_from(&self.run.remesh_baseline);
-        next.run.next_dt = self.run.next_dt;
-        next.run.last_report.clone_from(&self.run.last_report);
         *self = next;
         Ok(moved)
     }
@@ -295,8 +285,8 @@ impl Simulation {
         if let Some(c) = self.contact.as_mut() {
             c.commit();
         }
-        for d in 0..self.run.u_prev.len() {
-            self.run.u_prev[d] += trial.u[d] - self.sol.u[d];
+        for d in 0..self.u_prev.len() {
+            self.u_prev[d] += trial.u[d] - self.sol.u[d];
         }
         self.sol.u = trial.u;
         self.sol.lambda = trial.lambda;

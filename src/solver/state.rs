@@ -27,26 +27,14 @@ pub struct Solution {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SimScalars {
     pub time: f64,
-    pub step: usize,
-    /// The last converged step size (the predictor's and the inertial anchor's Δt_{n−1}).
-    pub dt_prev: f64,
-    /// The step size the next step tries.
-    pub next_dt: f64,
-    pub total_iterations: usize,
-    pub total_cutbacks: usize,
-    pub total_remeshes: usize,
+    /// Counters, step sizes, energies, references (their keys sit at this level of the
+    /// checkpoint's map, as before they were grouped).
+    #[serde(flatten)]
+    pub run: RunState,
     pub stab_all: bool,
     pub stab_viscous: bool,
     pub stab_energy: f64,
-    pub work_ext: f64,
-    pub last_wall_force: Vec<f64>,
-    /// Initial body areas (the volume error's reference, kept over re-meshes).
-    pub area0_body: Vec<f64>,
-    pub area0_total: f64,
-    pub force_floor: f64,
     pub timing: Timing,
-    pub remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,
-    pub last_report: Option<StepReport>,
     /// Repartitions, kept partitions, moved particles and partitioning time of the run so far
     /// (absent from older checkpoints: zero).
     #[serde(default)]
@@ -80,8 +68,8 @@ pub struct PartitionTotals {
 
 /// The run's state between steps besides the solution: the step counter and size control,
 /// the totals, the energies and the references of the volume error.
-#[derive(Clone, Debug)]
-pub(super) struct RunState {
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunState {
     pub step: usize,
     /// The last converged step size (the predictor's and the inertial anchor's Δt_{n−1}).
     pub dt_prev: f64,
@@ -91,17 +79,15 @@ pub(super) struct RunState {
     pub total_cutbacks: usize,
     /// Particle re-meshes so far.
     pub total_remeshes: usize,
-    /// u_{n−1}: the predictor's and the inertial stabilisation's previous displacement.
-    pub u_prev: Vec<f64>,
+    /// Work of the walls on the particles since the start, and the wall forces of the last
+    /// step (N·mm/mm, N/mm).
+    pub work_ext: f64,
+    pub last_wall_force: Vec<f64>,
     /// Initial body areas (the volume error's reference, kept over re-meshes).
     pub area0_body: Vec<f64>,
     pub area0_total: f64,
     /// Forces below this are round-off.
     pub force_floor: f64,
-    /// Work of the walls on the particles since the start, and the wall forces of the last
-    /// step (N·mm/mm, N/mm).
-    pub work_ext: f64,
-    pub last_wall_force: Vec<f64>,
     /// Per body: the quality of its last new mesh when that mesh itself crossed the limits
     /// (it is then re-meshed again only once it has become clearly worse).
     pub remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,

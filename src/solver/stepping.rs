@@ -201,7 +201,7 @@ impl Simulation {
         // converged state do not hold
         let n_bodies = self.model.bodies.len();
         let held = || c.body_support(&x_n, &walls_n, n_bodies);
-        self.springs.prepare(&self.model.stabilisation, &self.sol.u, &self.run.u_prev, dt, self.run.dt_prev, self.time.dt, held);
+        self.springs.prepare(&self.model.stabilisation, &self.sol.u, &self.u_prev, dt, self.run.dt_prev, self.time.dt, held);
         Ok(())
     }
 
@@ -217,7 +217,7 @@ impl Simulation {
             let s = dt / self.run.dt_prev;
             for (d, &q) in self.sys.assembler.eq.iter().enumerate() {
                 if q != FIXED {
-                    u[d] += s * (self.sol.u[d] - self.run.u_prev[d]);
+                    u[d] += s * (self.sol.u[d] - self.u_prev[d]);
                 }
             }
         }
@@ -245,7 +245,7 @@ impl Simulation {
         if let Some(c) = self.contact.as_mut() {
             c.commit();
         }
-        self.run.u_prev.copy_from_slice(&self.sol.u);
+        self.u_prev.copy_from_slice(&self.sol.u);
         self.sol.u = trial.u;
         self.sol.lambda = trial.lambda;
         std::mem::swap(&mut self.sol.fields, &mut self.sys.trial_fields);
