@@ -282,9 +282,8 @@ fn compatible_gradient(uu: &[[f64; 2]; 4], dn_dx0: &[[f64; 2]; 4]) -> [[f64; 2];
     f2
 }
 
-/// det J₀ and ∂N_a/∂X = ∂N_a/∂ξ J₀⁻¹ at (ξ, η), with J₀ = ∂X/∂ξ the reference Jacobian;
-/// an error if the reference element is inverted there.
-fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [[f64; 2]; 4]), MaterialError> {
+/// ∂N_a/∂ξ and the reference Jacobian J₀ = ∂X/∂ξ = Σ_a X_a ⊗ ∂N_a/∂ξ at (ξ, η).
+fn reference_jacobian(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> ([[f64; 2]; 4], [[f64; 2]; 2]) {
     let dn = shape_derivs(xi, eta);
     let mut j0 = [[0.0; 2]; 2];
     for a in 0..4 {
@@ -294,6 +293,13 @@ fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [
             }
         }
     }
+    (dn, j0)
+}
+
+/// det J₀ and ∂N_a/∂X = ∂N_a/∂ξ J₀⁻¹ at (ξ, η), with J₀ = ∂X/∂ξ the reference Jacobian;
+/// an error if the reference element is inverted there.
+fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [[f64; 2]; 4]), MaterialError> {
+    let (dn, j0) = reference_jacobian(xx0, xi, eta);
     let (det_j0, j0_inv) = inv2(&j0);
     if det_j0 <= 0.0 {
         return Err(MaterialError::InvertedElement(det_j0));
@@ -520,15 +526,7 @@ pub fn evaluate_enhanced(input: ElementInput<'_>, alpha: &mut [f64; N_ENH], out:
     let p = vp.p;
 
     // centre Jacobian
-    let dn_c = shape_derivs(0.0, 0.0);
-    let mut jc = [[0.0; 2]; 2];
-    for a in 0..4 {
-        for i in 0..2 {
-            for k in 0..2 {
-                jc[i][k] += xx0[a][i] * dn_c[a][k];
-            }
-        }
-    }
+    let (_, jc) = reference_jacobian(xx0, 0.0, 0.0);
     let (det_jc, jc_inv) = inv2(&jc);
 
     // per Gauss point geometry (fixed during the local iteration)
