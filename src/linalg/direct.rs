@@ -318,16 +318,13 @@ trait Factorisation {
     const NAME: &'static str;
     /// What the messages call the factorisation.
     const LABEL: &'static str;
-    /// Whether a symbolic analysis is held.
-    fn is_analysed(&self) -> bool;
-    /// Whether a successful numeric factorisation is held.
-    fn is_factored(&self) -> bool;
     /// Drop the symbolic analysis and the numeric factorisation.
     fn forget(&mut self);
     /// Symbolic analysis of the square matrix `a` (checked); returns the scratch memory the
     /// numeric factorisation and the solves need with parallelism `par`.
     fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError>;
-    /// Numeric factorisation of the n×n matrix `a`, whose pattern is the analysed one.
+    /// Numeric factorisation of the n×n matrix `a`, whose pattern is the analysed one (after a
+    /// successful `analyse`).
     fn factor(&mut self, a: &CsrMatrix, n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError>;
     /// Overwrite `rhs` with A⁻¹·rhs (after a successful `factor`).
     fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack);
@@ -335,13 +332,16 @@ trait Factorisation {
 
 /// A faer sparse direct solver: the factorisation `F` ([`LuFactors`] or [`CholeskyFactors`])
 /// and what both kinds share: the thread count, the kernel structure, the refinement settings,
-/// the pattern stamp that decides whether the analysis still holds, the counters, faer's
-/// workspace (sized at the analysis) and the work vectors of the refinement.
+/// whether an analysis and a factorisation are held, the pattern stamp that decides whether the
+/// analysis still holds, the counters, faer's workspace (sized at the analysis) and the work
+/// vectors of the refinement.
 pub struct FaerDirect<F> {
     threads: usize,
     par: Par,
     structure: FactorStructure,
     refine: Refinement,
+    analysed: bool,
+    factored: bool,
     stamp: PatternStamp,
     analyses: usize,
     refinements: usize,
@@ -360,6 +360,8 @@ impl<F: Default> FaerDirect<F> {
             par: faer_par(threads),
             structure: FactorStructure::Auto,
             refine: Refinement::default(),
+            analysed: false,
+            factored: false,
             stamp: PatternStamp::default(),
             analyses: 0,
             refinements: 0,
@@ -403,10 +405,12 @@ impl<F> FaerDirect<F> {
 
 impl<F: Factorisation + Send> LinearSolver for FaerDirect<F> {
     fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.fact.is_analysed() && self.stamp.matches(a) {
+        if self.analysed && self.stamp.matches(a) {
             return Ok(());
         }
         self.stamp.clear();
+        self.analysed = false;
+        self.factored = false;
         self.fact.forget();
         check_square(a)?;
         let n = a.nrows;
@@ -419,23 +423,27 @@ impl<F: Factorisation + Send> LinearSolver for FaerDirect<F> {
         self.mem = mem;
         self.r.resize(n, 0.0);
         self.d.resize(n, 0.0);
+        self.analysed = true;
         self.stamp = PatternStamp::of(a);
         self.analyses += 1;
         Ok(())
     }
 
     fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if !self.fact.is_analysed() || !self.stamp.matches(a) {
+        if !self.analysed || !self.stamp.matches(a) {
             self.analyze(a)?;
         }
-        self.fact.factor(a, self.n, self.par, &mut self.mem)
+        self.factored = false;
+        self.fact.factor(a, self.n, self.par, &mut self.mem)?;
+        self.factored = true;
+        Ok(())
     }
 
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
-        if !self.fact.is_analysed() {
+        if !self.analysed {
             return Err(LinalgError::NotAnalyzed);
         }
-        if !self.fact.is_factored() {
+        if !self.factored {
             return Err(LinalgError::Other(format!("{} solve called without a successful factorisation", F::LABEL)));
         }
         if a.nrows != self.n || a.ncols != self.n {
@@ -472,7 +480,6 @@ pub type FaerLu = FaerDirect<LuFactors>;
 pub struct LuFactors {
     symbolic: Option<SymbolicLu<usize>>,
     numeric: NumericLu<usize, f64>,
-    factored: bool,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     csc_pos: Vec<usize>,
@@ -490,17 +497,8 @@ impl Factorisation for LuFactors {
     const NAME: &'static str = "lu";
     const LABEL: &'static str = "LU";
 
-    fn is_analysed(&self) -> bool {
-        self.symbolic.is_some()
-    }
-
-    fn is_factored(&self) -> bool {
-        self.factored
-    }
-
     fn forget(&mut self) {
         self.symbolic = None;
-        self.factored = false;
     }
 
     fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError> {
@@ -520,7 +518,6 @@ impl Factorisation for LuFactors {
     }
 
     fn factor(&mut self, a: &CsrMatrix, n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError> {
-        self.factored = false;
         for (v, &k) in self.csc_values.iter_mut().zip(&self.csc_pos) {
             *v = a.values[k];
         }
@@ -531,10 +528,7 @@ impl Factorisation for LuFactors {
         let mat = SparseColMatRef::new(sym, &self.csc_values);
         let symbolic = self.symbolic.as_ref().expect("analysed");
         match symbolic.factorize_numeric_lu(&mut self.numeric, mat, par, MemStack::new(mem), Default::default()) {
-            Ok(_) => {
-                self.factored = true;
-                Ok(())
-            }
+            Ok(_) => Ok(()),
             Err(LuError::SymbolicSingular { index }) => Err(LinalgError::Singular(format!(
                 "LU: no pivot available at elimination step {index} (structurally singular matrix)"
             ))),
@@ -627,14 +621,6 @@ fn csr_as_csc(a: &CsrMatrix) -> SymbolicSparseColMatRef<'_, usize> {
 impl Factorisation for CholeskyFactors {
     const NAME: &'static str = "cholesky";
     const LABEL: &'static str = "Cholesky";
-
-    fn is_analysed(&self) -> bool {
-        self.symbolic.is_some()
-    }
-
-    fn is_factored(&self) -> bool {
-        self.kind.is_some()
-    }
 
     fn forget(&mut self) {
         self.symbolic = None;
