@@ -223,24 +223,6 @@ fn csr_to_csc_pattern(a: &CsrMatrix, col_ptr: &mut Vec<usize>, row_idx: &mut Vec
     }
 }
 
-fn check_square(a: &CsrMatrix) -> Result<(), LinalgError> {
-    if a.nrows != a.ncols {
-        return Err(LinalgError::Other(format!("matrix is {}×{}, expected square", a.nrows, a.ncols)));
-    }
-    a.check_structure().map_err(|e| LinalgError::Other(format!("invalid CSR matrix: {e}")))
-}
-
-fn check_vectors(n: usize, b: &[f64], x: &[f64]) -> Result<(), LinalgError> {
-    if b.len() != n || x.len() != n {
-        return Err(LinalgError::Other(format!(
-            "vector lengths b = {}, x = {} do not match the matrix dimension {n}",
-            b.len(),
-            x.len()
-        )));
-    }
-    Ok(())
-}
-
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -430,9 +412,7 @@ impl<F: Factorisation + Send> LinearSolver for FaerDirect<F> {
     }
 
     fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if !self.analysed || !self.stamp.matches(a) {
-            self.analyze(a)?;
-        }
+        self.analyze(a)?; // nothing to do when the pattern is the analysed one
         self.factored = false;
         self.fact.factor(a, self.n, self.par, &mut self.mem)?;
         self.factored = true;
