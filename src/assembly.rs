@@ -365,10 +365,10 @@ impl Assembler {
             // a missing entry is reported as an invalid (NaN) ratio of this element
             let j0e = j0.map_or(Some(1.0), |v| v.get(e).copied()).unwrap_or(f64::NAN);
             match model.element {
-                ElementKind::Q1P0 => element::evaluate_j0(model.formulation, law, &xx0, &ue, &old[e], inc, vol[e], j0e, tangent, &mut out),
+                ElementKind::Q1P0 => element::evaluate(model.formulation, element::ElementInput { law, xx0: &xx0, uu: &ue, old: &old[e], inc, vol: vol[e], j0: j0e, tangent }, &mut out),
                 ElementKind::Q1P0Enhanced => {
                     let mut a = alpha0[e];
-                    let r = element::evaluate_enhanced_j0(law, &xx0, &ue, &old[e], inc, vol[e], j0e, tangent, &mut a, &mut out);
+                    let r = element::evaluate_enhanced(element::ElementInput { law, xx0: &xx0, uu: &ue, old: &old[e], inc, vol: vol[e], j0: j0e, tangent }, &mut a, &mut out);
                     out.alpha = a;
                     r
                 }

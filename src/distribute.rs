@@ -197,42 +197,10 @@ mod tests {
         disc_grid_h(n, 4.0)
     }
 
+    /// `n × n` discs at solid ratio 0.7 in the 100 mm die, meshed at `h` (only the geometry
+    /// and the meshes matter to a partition).
     fn disc_grid_h(n: usize, h: f64) -> Model {
-        let text = format!(
-            r#"title = "partition test"
-[[materials]]
-name = "m"
-model = "elastic"
-youngs_modulus = 1000.0
-poisson_ratio = 0.3
-[[grids]]
-material = "m"
-nx = {n}
-ny = {n}
-shape = "disc"
-solid_ratio = 0.7
-mesh_size = {h}
-[time]
-end = 1.0
-dt = 0.1
-[[walls]]
-side = "left"
-position = 0.0
-velocity = 1.0
-[[walls]]
-side = "right"
-position = 100.0
-velocity = 1.0
-[[walls]]
-side = "bottom"
-position = 0.0
-velocity = 1.0
-[[walls]]
-side = "top"
-position = 100.0
-velocity = 1.0
-"#
-        );
+        let text = crate::bench_support::disc_grid_case(n, 100.0, 0.7, h, "");
         let case = crate::case::parse(&text, std::path::Path::new(".")).expect("case");
         Model::from_case(&case).expect("model")
     }

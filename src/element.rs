@@ -50,8 +50,8 @@
 //! one (exactly for a homogeneous deformation, `tests/rereference.rs`). j₀ is one value per
 //! element (P0, like the pressure); where the old deformation varied inside an element, the
 //! deviatoric Cauchy stress carries the factor J_old(point)/Θ_old of that variation.
-//! j₀ = 1 gives the same results, bit for bit, as an element without the option
-//! ([`evaluate`], [`evaluate_enhanced`]).
+//! j₀ = 1 ([`ElementInput::j0`]) gives the same results, bit for bit, as an element without
+//! the option: every j₀ operation is then exact.
 
 use crate::material::{ConstitutiveLaw, MatResponse, MatState, MaterialError, TimeIncrement};
 use nalgebra::Matrix3;
@@ -291,9 +291,8 @@ fn compatible_gradient(uu: &[[f64; 2]; 4], dn_dx0: &[[f64; 2]; 4]) -> [[f64; 2];
     f2
 }
 
-/// det J₀ and ∂N_a/∂X = ∂N_a/∂ξ J₀⁻¹ at (ξ, η), with J₀ = ∂X/∂ξ the reference Jacobian;
-/// an error if the reference element is inverted there.
-fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [[f64; 2]; 4]), MaterialError> {
+/// ∂N_a/∂ξ and the reference Jacobian J₀ = ∂X/∂ξ = Σ_a X_a ⊗ ∂N_a/∂ξ at (ξ, η).
+fn reference_jacobian(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> ([[f64; 2]; 4], [[f64; 2]; 2]) {
     let dn = shape_derivs(xi, eta);
     let mut j0 = [[0.0; 2]; 2];
     for a in 0..4 {
@@ -303,6 +302,13 @@ fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [
             }
         }
     }
+    (dn, j0)
+}
+
+/// det J₀ and ∂N_a/∂X = ∂N_a/∂ξ J₀⁻¹ at (ξ, η), with J₀ = ∂X/∂ξ the reference Jacobian;
+/// an error if the reference element is inverted there.
+fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [[f64; 2]; 4]), MaterialError> {
+    let (dn, j0) = reference_jacobian(xx0, xi, eta);
     let (det_j0, j0_inv) = inv2(&j0);
     if det_j0 <= 0.0 {
         return Err(MaterialError::InvertedElement(det_j0));
@@ -316,59 +322,65 @@ fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [
     Ok((det_j0, dn_dx0))
 }
 
-/// The law's response at a Gauss point relative to an element reference configuration with
-/// initial volume ratio j₀: τ′/j₀ and c/j₀ (module docs). `inv_j0` = 1/j₀ (exactly 1 for
-/// j₀ = 1, which leaves the response unchanged bit for bit).
-fn law_response(law: &dyn ConstitutiveLaw, ff: &Matrix3<f64>, old: &MatState, inc: TimeIncrement, inv_j0: f64) -> Result<MatResponse, MaterialError> {
-    let mut r = law.update(ff, old, inc)?;
+/// The law's response at a Gauss point with the in-plane deformation gradient `f2`, relative
+/// to an element reference configuration with initial volume ratio j₀: τ′/j₀ and c/j₀ (module
+/// docs), returned with J = det F and F⁻¹. `inv_j0` = 1/j₀ (exactly 1 for j₀ = 1, which leaves
+/// the response unchanged bit for bit). An error if F is inverted (J ≤ 0).
+fn law_response(
+    law: &dyn ConstitutiveLaw,
+    f2: &[[f64; 2]; 2],
+    old: &MatState,
+    inc: TimeIncrement,
+    inv_j0: f64,
+) -> Result<(f64, [[f64; 2]; 2], MatResponse), MaterialError> {
+    let (jac, f_inv) = inv2(f2);
+    if jac <= 0.0 {
+        return Err(MaterialError::InvertedElement(jac));
+    }
+    let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
+    let mut r = law.update(&ff, old, inc)?;
     r.tau.iter_mut().for_each(|v| *v *= inv_j0);
     r.cc.iter_mut().flatten().for_each(|v| *v *= inv_j0);
-    Ok(r)
+    Ok((jac, f_inv, r))
 }
 
-/// Evaluate one element whose reference configuration is the original one (j₀ = 1): the same
-/// as [`evaluate_j0`] with `j0 = 1.0`.
-///
-/// - `xx0`: reference nodal coordinates; `uu`: nodal displacements (mm). Kinematics are
-///   formed from the displacements (F = I + ∇₀u, v − V from the shoelace formula of the
-///   differences) so that tiny strains are not lost to round-off in X + u;
-/// - `old`: committed Gauss-point states; `inc`: the time increment;
-/// - `vol`: volumetric treatment; `tangent`: whether to form `kk`.
-///
-/// Errors when an element is inverted at a Gauss point or a local return map fails.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate(
-    formulation: Formulation,
-    law: &dyn ConstitutiveLaw,
-    xx0: &[[f64; 2]; 4],
-    uu: &[[f64; 2]; 4],
-    old: &[MatState; 4],
-    inc: TimeIncrement,
-    vol: Volumetric,
-    tangent: bool,
-    out: &mut ElementOut,
-) -> Result<(), MaterialError> {
-    evaluate_j0(formulation, law, xx0, uu, old, inc, vol, 1.0, tangent, out)
+/// Cauchy stress `[xx, yy, xy, zz]` = τ′/J + p I of a Gauss point.
+fn cauchy(tau: &[f64; 4], jac: f64, p: f64) -> [f64; 4] {
+    [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p]
 }
 
-/// Evaluate one element (arguments as [`evaluate`]) whose reference configuration carries the
-/// initial volume ratio `j0` (module docs: Θ = j₀ v_e/V_e, deviatoric stress τ′/(j₀ J)).
+/// What an element evaluation reads, the same for both element kinds ([`evaluate`],
+/// [`evaluate_enhanced`]).
+#[derive(Clone, Copy)]
+pub struct ElementInput<'a> {
+    /// The element's constitutive law.
+    pub law: &'a dyn ConstitutiveLaw,
+    /// Reference nodal coordinates (mm).
+    pub xx0: &'a [[f64; 2]; 4],
+    /// Nodal displacements (mm). Kinematics are formed from the displacements (F = I + ∇₀u,
+    /// v − V from the shoelace formula of the differences) so that tiny strains are not lost
+    /// to round-off in X + u.
+    pub uu: &'a [[f64; 2]; 4],
+    /// Committed Gauss-point states.
+    pub old: &'a [MatState; 4],
+    /// The time increment.
+    pub inc: TimeIncrement,
+    /// Volumetric treatment.
+    pub vol: Volumetric,
+    /// Initial volume ratio j₀ of the element's reference configuration (module docs:
+    /// Θ = j₀ v_e/V_e, deviatoric stress τ′/(j₀ J)); 1 when the reference configuration is the
+    /// original one.
+    pub j0: f64,
+    /// Whether to form the tangent `kk`.
+    pub tangent: bool,
+}
+
+/// Evaluate one Q1/P0 element in the given formulation.
 ///
-/// Errors as [`evaluate`], and [`MaterialError::InvalidVolumeRatio`] when `j0` is not positive
-/// and finite.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_j0(
-    formulation: Formulation,
-    law: &dyn ConstitutiveLaw,
-    xx0: &[[f64; 2]; 4],
-    uu: &[[f64; 2]; 4],
-    old: &[MatState; 4],
-    inc: TimeIncrement,
-    vol: Volumetric,
-    j0: f64,
-    tangent: bool,
-    out: &mut ElementOut,
-) -> Result<(), MaterialError> {
+/// Errors when an element is inverted at a Gauss point or a local return map fails, and
+/// [`MaterialError::InvalidVolumeRatio`] when `j0` is not positive and finite.
+pub fn evaluate(formulation: Formulation, input: ElementInput<'_>, out: &mut ElementOut) -> Result<(), MaterialError> {
+    let ElementInput { law, xx0, uu, old, inc, vol, j0, tangent } = input;
     check_j0(j0)?;
     let inv_j0 = 1.0 / j0;
     out.f_int = [0.0; 8];
@@ -387,18 +399,10 @@ pub fn evaluate_j0(
     for (q, gp) in GAUSS.iter().enumerate() {
         let (det_j0, dn_dx0) = reference_gradients(xx0, gp[0], gp[1])?;
         let f2 = compatible_gradient(uu, &dn_dx0);
-        let (jac, f_inv) = inv2(&f2);
-        if jac <= 0.0 {
-            return Err(MaterialError::InvertedElement(jac));
-        }
-        let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
-        let MatResponse { tau, cc, state } = law_response(law, &ff, &old[q], inc, inv_j0)?;
+        let (jac, f_inv, MatResponse { tau, cc, state }) = law_response(law, &f2, &old[q], inc, inv_j0)?;
         let w0 = det_j0; // Gauss weight 1, unit thickness: dV₀ = det J0
 
-        out.gauss[q] = GaussOut {
-            sig: [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p],
-            state,
-        };
+        out.gauss[q] = GaussOut { sig: cauchy(&tau, jac, p), state };
 
         match formulation {
             Formulation::TotalLagrangian => {
@@ -518,39 +522,12 @@ pub const N_ENH: usize = 4;
 /// Both TL and UL requests are computed in the total Lagrangian algebra: each column j of the
 /// 12 generalised degrees of freedom has a gradient variation δFʲ, with
 /// `B_L[:, j] = sym(Fᵀ δFʲ)` (rows δE₁₁, δE₂₂, 2δE₁₂) and `K_NL[i][j] = δFⁱ : (δFʲ S)`.
-/// On return `alpha` holds the solution. The reference configuration is the original one
-/// (j₀ = 1): the same as [`evaluate_enhanced_j0`] with `j0 = 1.0`.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_enhanced(
-    law: &dyn ConstitutiveLaw,
-    xx0: &[[f64; 2]; 4],
-    uu: &[[f64; 2]; 4],
-    old: &[MatState; 4],
-    inc: TimeIncrement,
-    vol: Volumetric,
-    tangent: bool,
-    alpha: &mut [f64; N_ENH],
-    out: &mut ElementOut,
-) -> Result<(), MaterialError> {
-    evaluate_enhanced_j0(law, xx0, uu, old, inc, vol, 1.0, tangent, alpha, out)
-}
-
-/// [`evaluate_enhanced`] for an element whose reference configuration carries the initial
-/// volume ratio `j0` (module docs). Errors as [`evaluate_enhanced`], and
-/// [`MaterialError::InvalidVolumeRatio`] when `j0` is not positive and finite.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_enhanced_j0(
-    law: &dyn ConstitutiveLaw,
-    xx0: &[[f64; 2]; 4],
-    uu: &[[f64; 2]; 4],
-    old: &[MatState; 4],
-    inc: TimeIncrement,
-    vol: Volumetric,
-    j0: f64,
-    tangent: bool,
-    alpha: &mut [f64; N_ENH],
-    out: &mut ElementOut,
-) -> Result<(), MaterialError> {
+/// On return `alpha` holds the solution.
+///
+/// Errors as [`evaluate`], and [`MaterialError::ReturnMapFailed`] when the local iteration
+/// does not converge.
+pub fn evaluate_enhanced(input: ElementInput<'_>, alpha: &mut [f64; N_ENH], out: &mut ElementOut) -> Result<(), MaterialError> {
+    let ElementInput { law, xx0, uu, old, inc, vol, j0, tangent } = input;
     check_j0(j0)?;
     let inv_j0 = 1.0 / j0;
     // volumetric part and pressure: same as the Q1/P0 element
@@ -558,15 +535,7 @@ pub fn evaluate_enhanced_j0(
     let p = vp.p;
 
     // centre Jacobian
-    let dn_c = shape_derivs(0.0, 0.0);
-    let mut jc = [[0.0; 2]; 2];
-    for a in 0..4 {
-        for i in 0..2 {
-            for k in 0..2 {
-                jc[i][k] += xx0[a][i] * dn_c[a][k];
-            }
-        }
-    }
+    let (_, jc) = reference_jacobian(xx0, 0.0, 0.0);
     let (det_jc, jc_inv) = inv2(&jc);
 
     // per Gauss point geometry (fixed during the local iteration)
@@ -608,13 +577,8 @@ pub fn evaluate_enhanced_j0(
                     }
                 }
             }
-            let (jac, f_inv) = inv2(&f2);
-            if jac <= 0.0 {
-                return Err(MaterialError::InvertedElement(jac));
-            }
-            let ff = Matrix3::new(f2[0][0], f2[0][1], 0.0, f2[1][0], f2[1][1], 0.0, 0.0, 0.0, 1.0);
-            let MatResponse { tau, cc, state } = law_response(law, &ff, &old[q], inc, inv_j0)?;
-            out.gauss[q] = GaussOut { sig: [tau[0] / jac + p, tau[1] / jac + p, tau[2] / jac, tau[3] / jac + p], state };
+            let (jac, f_inv, MatResponse { tau, cc, state }) = law_response(law, &f2, &old[q], inc, inv_j0)?;
+            out.gauss[q] = GaussOut { sig: cauchy(&tau, jac, p), state };
             let t = voigt_congruence(&f_inv);
             let s = pull_back_stress(&t, &tau);
             // δF of every generalised dof
@@ -721,10 +685,10 @@ mod tests {
         let inc = TimeIncrement { time: 1.0, dt: 1.0 };
         let mut out = ElementOut::default();
         match kind {
-            Some(f) => evaluate_j0(f, law, &XX0, uu, &old, inc, vol, j0, tangent, &mut out).unwrap(),
+            Some(f) => evaluate(f, ElementInput { law, xx0: &XX0, uu, old: &old, inc, vol, j0, tangent }, &mut out).unwrap(),
             None => {
                 let mut alpha = [0.0; N_ENH];
-                evaluate_enhanced_j0(law, &XX0, uu, &old, inc, vol, j0, tangent, &mut alpha, &mut out).unwrap();
+                evaluate_enhanced(ElementInput { law, xx0: &XX0, uu, old: &old, inc, vol, j0, tangent }, &mut alpha, &mut out).unwrap();
             }
         }
         out
@@ -802,10 +766,11 @@ mod tests {
         let inc = TimeIncrement { time: 1.0, dt: 1.0 };
         let mut out = ElementOut::default();
         for bad in [0.0, -2.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            let e = evaluate_j0(Formulation::TotalLagrangian, &law, &XX0, &[[0.0; 2]; 4], &old, inc, vol, bad, true, &mut out);
+            let input = ElementInput { law: &law, xx0: &XX0, uu: &[[0.0; 2]; 4], old: &old, inc, vol, j0: bad, tangent: true };
+            let e = evaluate(Formulation::TotalLagrangian, input, &mut out);
             assert!(matches!(e, Err(MaterialError::InvalidVolumeRatio(_))), "{bad}: {e:?}");
             let mut a = [0.0; N_ENH];
-            let e = evaluate_enhanced_j0(&law, &XX0, &[[0.0; 2]; 4], &old, inc, vol, bad, true, &mut a, &mut out);
+            let e = evaluate_enhanced(input, &mut a, &mut out);
             assert!(matches!(e, Err(MaterialError::InvalidVolumeRatio(_))), "{bad}: {e:?}");
         }
     }

@@ -1,7 +1,7 @@
 //! Case-file validation: every bad input gives one clear error naming the key, the value and
 //! the expectation; every shipped job parses; defaults are applied as documented.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mpfem::case::{
     self, Amplitude, CaseError, Formulation, LinearChoice, LoadKind, NewtonKind, ShapeSpec,
@@ -11,9 +11,8 @@ use mpfem::dynamics::Integrator;
 use mpfem::linalg::{LinearSolverKind, Preconditioner};
 use mpfem::material::Material;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::root;
 
 fn bad(name: &str) -> CaseError {
     let path = root().join("jobs/examples/bad").join(name);

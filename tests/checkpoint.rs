@@ -7,23 +7,11 @@
 //! (history.csv has no wall-clock column, so every column is compared.)
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn mpfem() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mpfem"))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::{mpfem, root, tmpdir};
 
 /// A shipped job with `extra` appended, written into `dir`.
 fn case_from(job: &str, dir: &Path, extra: &str) -> PathBuf {

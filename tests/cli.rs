@@ -2,19 +2,8 @@
 //! summary; bad input exits with code 2 and names the key; a run that cannot go on exits 1 and
 //! keeps every row written so far.
 
-use std::path::PathBuf;
-use std::process::Command;
-
-fn mpfem() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mpfem"))
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::{mpfem, tmpdir};
 
 #[test]
 fn default_job_runs_and_writes_history_and_summary() {

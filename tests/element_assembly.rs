@@ -8,15 +8,16 @@
 
 use mpfem::bench_support::{assembly_fixture, Law};
 use mpfem::case::Formulation;
-use mpfem::element::{evaluate, evaluate_enhanced, ElementOut, Volumetric};
+use mpfem::element::{evaluate, evaluate_enhanced, ElementInput, ElementOut, Volumetric};
 use mpfem::material::{ConstitutiveLaw, Elastic, HardeningTable, J2Plastic, MatState, Material, TimeIncrement};
 
 fn fd_check(formulation: Formulation, law: &Material, vol: Volumetric, uu: [[f64; 2]; 4]) -> f64 {
     let xx0 = [[0.0, 0.0], [1.0, 0.1], [1.1, 1.0], [-0.1, 0.9]];
     let old = [MatState::default(); 4];
     let inc = TimeIncrement { time: 1.0, dt: 1.0 };
+    let input = ElementInput { law, xx0: &xx0, uu: &uu, old: &old, inc, vol, j0: 1.0, tangent: true };
     let mut out = ElementOut::default();
-    evaluate(formulation, law, &xx0, &uu, &old, inc, vol, true, &mut out).expect("element");
+    evaluate(formulation, input, &mut out).expect("element");
     let kk = out.kk;
     let h = 1e-7;
     let mut worst: f64 = 0.0;
@@ -29,8 +30,8 @@ fn fd_check(formulation: Formulation, law: &Material, vol: Volumetric, uu: [[f64
         dn[a][c] -= h;
         let mut op = ElementOut::default();
         let mut om = ElementOut::default();
-        evaluate(formulation, law, &xx0, &up, &old, inc, vol, false, &mut op).expect("element +h");
-        evaluate(formulation, law, &xx0, &dn, &old, inc, vol, false, &mut om).expect("element -h");
+        evaluate(formulation, ElementInput { uu: &up, tangent: false, ..input }, &mut op).expect("element +h");
+        evaluate(formulation, ElementInput { uu: &dn, tangent: false, ..input }, &mut om).expect("element -h");
         for i in 0..8 {
             let fd = (op.f_int[i] - om.f_int[i]) / (2.0 * h);
             worst = worst.max((fd - kk[i][j]).abs() / scale);
@@ -89,9 +90,10 @@ fn enhanced_element_condensed_tangent_matches_finite_differences() {
     let j2 = Material::J2(J2Plastic::new(e, 0.3, HardeningTable::perfect(130.0)));
     for (law, uu) in [(Material::Elastic(Elastic::new(e, 0.3)), uu), (j2, uu.map(|p| [0.02 * p[0], 0.02 * p[1]]))] {
         let vol = Volumetric { kappa: law.bulk_modulus().unwrap(), lambda: 0.0 };
+        let input = ElementInput { law: &law, xx0: &xx0, uu: &uu, old: &old, inc, vol, j0: 1.0, tangent: true };
         let mut out = ElementOut::default();
         let mut alpha = [0.0; 4];
-        evaluate_enhanced(&law, &xx0, &uu, &old, inc, vol, true, &mut alpha, &mut out).unwrap();
+        evaluate_enhanced(input, &mut alpha, &mut out).unwrap();
         assert!(alpha.iter().any(|a| a.abs() > 1e-8), "the enhanced modes must be active: {alpha:?}");
         let scale = out.kk.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
         let h = 1e-7;
@@ -103,8 +105,8 @@ fn enhanced_element_condensed_tangent_matches_finite_differences() {
             dn[a][c] -= h;
             let (mut op, mut om) = (ElementOut::default(), ElementOut::default());
             let (mut ap, mut am) = (alpha, alpha);
-            evaluate_enhanced(&law, &xx0, &up, &old, inc, vol, false, &mut ap, &mut op).unwrap();
-            evaluate_enhanced(&law, &xx0, &dn, &old, inc, vol, false, &mut am, &mut om).unwrap();
+            evaluate_enhanced(ElementInput { uu: &up, tangent: false, ..input }, &mut ap, &mut op).unwrap();
+            evaluate_enhanced(ElementInput { uu: &dn, tangent: false, ..input }, &mut am, &mut om).unwrap();
             for i in 0..8 {
                 let fd = (op.f_int[i] - om.f_int[i]) / (2.0 * h);
                 worst = worst.max((fd - out.kk[i][j]).abs() / scale);

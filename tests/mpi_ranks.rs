@@ -20,19 +20,15 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+use common::{mpfem, tmpdir};
+
 const CASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3.toml");
 /// Elastic and frictionless (a symmetric positive definite tangent), with the Schwarz PCG.
 const CASE_PCG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3_pcg.toml");
 const TOL: f64 = 1e-8;
 /// The wall pressures and forces, and the solid ratio they are plotted against.
 const COMPARED: [&str; 9] = ["solid_ratio", "p_left", "p_right", "p_bottom", "p_top", "f_left", "f_right", "f_bottom", "f_top"];
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem_mpi_ranks_{}_{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("tmp dir");
-    d
-}
 
 fn read_history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(dir.join("history.csv")).unwrap_or_else(|e| panic!("{}/history.csv: {e}", dir.display()));
@@ -174,7 +170,7 @@ fn checkpoints_move_between_rank_counts() {
     // smaller steps, so that the signal comes in the middle of the run
     std::fs::write(&slow, std::fs::read_to_string(&case).unwrap().replace("dt_max = 0.1", "dt_max = 0.01").replace("dt = 0.05", "dt = 0.01").replace("checkpoint_every = 4", "checkpoint_every = 0")).unwrap();
     let slow_serial = dir.join("slow_serial");
-    let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("run").arg(&slow).arg("--out").arg(&slow_serial).args(["--quiet", "--no-plots", "--threads", "1"]).output().unwrap();
+    let o = mpfem().arg("run").arg(&slow).arg("--out").arg(&slow_serial).args(["--quiet", "--no-plots", "--threads", "1"]).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut child = mpirun(2)
         .arg("run")

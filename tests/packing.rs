@@ -2,13 +2,15 @@
 //! die, seeded reproducibility, material fractions, meshable particles, and the `[[packings]]`
 //! table of a case (expanded to bodies, checked by `mpfem check` after `mpfem pack`).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use mpfem::mesh::quality::quality;
 use mpfem::mesh::shapes;
 use mpfem::packing::overlap::{signed_distance, Convex};
 use mpfem::packing::random::{material_counts, random_discs, voronoi_ellipses, voronoi_polygons, Die, PackError, Packing, RandomSpec, Sizes};
+
+mod common;
+use common::{mpfem, tmpdir};
 
 type Generator = fn(Die, &RandomSpec) -> Result<Packing, PackError>;
 const GENERATORS: [Generator; 3] = [voronoi_polygons, voronoi_ellipses, random_discs];
@@ -165,13 +167,6 @@ fn material_fractions_are_within_one_particle() {
 // ---------------------------------------------------------------------------------------------
 // The case table and `mpfem pack`
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-pack-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 const CASE: &str = r#"
 title = "random packing"
 
@@ -241,7 +236,7 @@ fn pack_writes_a_case_that_checks_and_a_preview() {
     let case = dir.join("case.toml");
     std::fs::write(&case, CASE).unwrap();
     let out = dir.join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("pack").arg(&case).arg("--out").arg(&out).output().unwrap();
+    let o = mpfem().arg("pack").arg(&case).arg("--out").arg(&out).output().unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("9 particles") && stdout.contains("solid ratio 0.750000"), "{stdout}");
@@ -253,7 +248,7 @@ fn pack_writes_a_case_that_checks_and_a_preview() {
     let a = mpfem::case::load(&case).unwrap();
     let b = mpfem::case::load(&packed).unwrap();
     assert_eq!(a.bodies, b.bodies);
-    let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("check").arg(&packed).output().unwrap();
+    let o = mpfem().arg("check").arg(&packed).output().unwrap();
     assert!(o.status.success(), "{}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("0 inverted element(s)"));
     // the preview is a PNG picture
@@ -263,11 +258,11 @@ fn pack_writes_a_case_that_checks_and_a_preview() {
     // from the written case
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/examples/upsetting_table_file.toml");
     let out2 = dir.join("out2");
-    let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("pack").arg(&src).arg("--out").arg(&out2).output().unwrap();
+    let o = mpfem().arg("pack").arg(&src).arg("--out").arg(&out2).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("1 particles (no die"));
     assert_eq!(mpfem::case::load(&out2.join("packed.toml")).unwrap().materials, mpfem::case::load(&src).unwrap().materials);
     // a missing case file is bad input
-    let o = Command::new(env!("CARGO_BIN_EXE_mpfem")).arg("pack").arg(dir.join("missing.toml")).output().unwrap();
+    let o = mpfem().arg("pack").arg(dir.join("missing.toml")).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
 }

@@ -4,8 +4,11 @@
 //! PNG. Skipped (with a message) only when `pvpython` is not installed and `CI` is not set;
 //! under CI a missing `pvpython` fails the test.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+
+mod common;
+use common::{run_quiet, tmpdir};
 
 const CASE: &str = include_str!("data/discs_coarse.toml");
 
@@ -50,13 +53,6 @@ if not os.path.exists("./von_mises.png") or os.path.getsize("./von_mises.png") =
 print("pvpython: %d time steps, von_mises %.6g..%.6g MPa, von_mises.png written" % (len(times), lo, hi))
 "#;
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-paraview-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|p| p.join(program).is_file()))
@@ -91,16 +87,7 @@ fn paraview_opens_results_xdmf() {
         return;
     }
     let dir = tmpdir("run");
-    let case = dir.join("case.toml");
-    std::fs::write(&case, CASE).unwrap();
-    let out = dir.join("out");
-    let st = Command::new(env!("CARGO_BIN_EXE_mpfem"))
-        .args(["run", "--quiet", "--out"])
-        .arg(&out)
-        .arg(&case)
-        .status()
-        .unwrap();
-    assert!(st.success());
+    let out = run_quiet(&dir, CASE);
     let times = output_times(&out);
     assert!(times.len() >= 2);
     std::fs::write(out.join("check_results.py"), SCRIPT).unwrap();

@@ -15,14 +15,10 @@ use mpfem::plot::{colour_map, PRESSURE_SIZE, SERIES_COLOURS, SNAPSHOT_SIZE, WALL
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-const CASE: &str = include_str!("data/discs_coarse.toml");
+mod common;
+use common::tmpdir;
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-plots-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+const CASE: &str = include_str!("data/discs_coarse.toml");
 
 fn mpfem(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mpfem"))

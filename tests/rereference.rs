@@ -25,7 +25,7 @@
 //! whether a Δγ of a few ulps is returned). A failing assertion prints the differences.
 
 use mpfem::case::{self, Formulation};
-use mpfem::element::{evaluate_enhanced_j0, evaluate_j0, ElementOut, Volumetric, GAUSS};
+use mpfem::element::{evaluate, evaluate_enhanced, ElementInput, ElementOut, Volumetric, GAUSS};
 use mpfem::material::logstrain::left_cauchy_green;
 use mpfem::material::{ConstitutiveLaw, Creep, CreepParams, Elastic, HardeningTable, J2Plastic, MatState, Material, TimeIncrement};
 use mpfem::model::Model;
@@ -79,12 +79,13 @@ const KINDS: [Kind; 3] = [Kind::Q1P0(Formulation::TotalLagrangian), Kind::Q1P0(F
 
 #[allow(clippy::too_many_arguments)]
 fn eval(kind: Kind, law: &Material, xx: &[[f64; 2]; 4], uu: &[[f64; 2]; 4], old: &[MatState; 4], inc: TimeIncrement, vol: Volumetric, j0: f64) -> ElementOut {
+    let input = ElementInput { law, xx0: xx, uu, old, inc, vol, j0, tangent: true };
     let mut out = ElementOut::default();
     match kind {
-        Kind::Q1P0(f) => evaluate_j0(f, law, xx, uu, old, inc, vol, j0, true, &mut out).expect("element"),
+        Kind::Q1P0(f) => evaluate(f, input, &mut out).expect("element"),
         Kind::Enhanced => {
             let mut alpha = [0.0; 4];
-            evaluate_enhanced_j0(law, xx, uu, old, inc, vol, j0, true, &mut alpha, &mut out).expect("enhanced element");
+            evaluate_enhanced(input, &mut alpha, &mut out).expect("enhanced element");
             out.alpha = alpha;
         }
     }
@@ -389,10 +390,11 @@ fn invalid_j0_is_an_error() {
     let st = [MatState::default(); 4];
     let inc = TimeIncrement { time: 1.0, dt: 1.0 };
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let input = ElementInput { law: &c.law, xx0: &XX0, uu: &uu, old: &st, inc, vol: c.vol, j0: bad, tangent: true };
         let mut out = ElementOut::default();
-        assert!(evaluate_j0(Formulation::UpdatedLagrangian, &c.law, &XX0, &uu, &st, inc, c.vol, bad, true, &mut out).is_err());
+        assert!(evaluate(Formulation::UpdatedLagrangian, input, &mut out).is_err());
         let mut alpha = [0.0; 4];
-        assert!(evaluate_enhanced_j0(&c.law, &XX0, &uu, &st, inc, c.vol, bad, true, &mut alpha, &mut out).is_err());
+        assert!(evaluate_enhanced(input, &mut alpha, &mut out).is_err());
     }
     let text = std::fs::read_to_string("jobs/verification/patch_test.toml").unwrap();
     let base = case::parse(&text, std::path::Path::new("jobs/verification")).unwrap();

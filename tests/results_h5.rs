@@ -3,15 +3,10 @@
 //! crate; the shapes, the output steps and their times agree with `history.csv`, the last step
 //! is always written, and the XDMF file is well formed with one grid per output step.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-results-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::{mpfem, run_quiet, tmpdir};
 
 const CASE: &str = include_str!("data/discs_coarse.toml");
 
@@ -65,16 +60,8 @@ fn xml_tags(text: &str) -> Vec<String> {
 #[test]
 fn run_writes_results_h5_and_xdmf_matching_the_history() {
     let dir = tmpdir("coarse");
+    let out = run_quiet(&dir, CASE);
     let case = dir.join("case.toml");
-    std::fs::write(&case, CASE).unwrap();
-    let out = dir.join("out");
-    let st = Command::new(env!("CARGO_BIN_EXE_mpfem"))
-        .args(["run", "--quiet", "--out"])
-        .arg(&out)
-        .arg(&case)
-        .status()
-        .unwrap();
-    assert!(st.success());
 
     let hist = history(&out);
     assert!(
@@ -333,7 +320,7 @@ fn output_every_zero_writes_no_results_and_negative_is_an_error() {
     let case = dir.join("case.toml");
     let bad = CASE.replace("every = 2", "every = -1");
     std::fs::write(&case, bad).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_mpfem"))
+    let o = mpfem()
         .args(["check"])
         .arg(&case)
         .output()
@@ -357,7 +344,7 @@ fn killed_run_leaves_a_readable_results_file() {
         .replace("dt = 0.05", "dt = 0.01");
     std::fs::write(&case, long).unwrap();
     let out = dir.join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mpfem"))
+    let mut child = mpfem()
         .args(["run", "--quiet", "--out"])
         .arg(&out)
         .arg(&case)

@@ -2,24 +2,15 @@
 //! each in its own folder; the table repeats each run's summary.json and the overlay plot has
 //! every run's curves; bad study files exit 2 naming what is wrong.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-study-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::{mpfem, root, tmpdir};
 
 fn study(dir: &Path, text: &str) -> std::process::Output {
     let file = dir.join("study.toml");
     std::fs::write(&file, text).unwrap();
-    Command::new(env!("CARGO_BIN_EXE_mpfem"))
+    mpfem()
         .args(["study", "--parallel", "2", "--out"])
         .arg(dir.join("out"))
         .arg(&file)

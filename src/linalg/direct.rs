@@ -1,6 +1,8 @@
 //! faer sparse direct solvers: LU with partial pivoting ([`FaerLu`]) and Cholesky
 //! ([`FaerCholesky`]: LLᵀ, falling back to a Bunch–Kaufman LBLᵀ or an LDLᵀ factorisation on the
-//! same symbolic structure when the matrix is not positive definite).
+//! same symbolic structure when the matrix is not positive definite). Both are a [`FaerDirect`]:
+//! the pattern check, the workspace and the checked solve are written once; [`LuFactors`] and
+//! [`CholeskyFactors`] hold what is each one's own.
 //!
 //! The fill-reducing ordering of the Cholesky factorisation is a [`FillOrdering`]: faer's
 //! approximate minimum degree (AMD) or METIS nested dissection (from the `partition` crate). The
@@ -221,24 +223,6 @@ fn csr_to_csc_pattern(a: &CsrMatrix, col_ptr: &mut Vec<usize>, row_idx: &mut Vec
     }
 }
 
-fn check_square(a: &CsrMatrix) -> Result<(), LinalgError> {
-    if a.nrows != a.ncols {
-        return Err(LinalgError::Other(format!("matrix is {}×{}, expected square", a.nrows, a.ncols)));
-    }
-    a.check_structure().map_err(|e| LinalgError::Other(format!("invalid CSR matrix: {e}")))
-}
-
-fn check_vectors(n: usize, b: &[f64], x: &[f64]) -> Result<(), LinalgError> {
-    if b.len() != n || x.len() != n {
-        return Err(LinalgError::Other(format!(
-            "vector lengths b = {}, x = {} do not match the matrix dimension {n}",
-            b.len(),
-            x.len()
-        )));
-    }
-    Ok(())
-}
-
 fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -306,35 +290,51 @@ fn solve_checked(
 }
 
 // ---------------------------------------------------------------------------------------------
-// LU
+// What LU and Cholesky share
 // ---------------------------------------------------------------------------------------------
 
-/// faer sparse LU with partial (row) pivoting and a COLAMD fill-reducing column ordering.
-///
-/// `analyze` converts the CSR pattern to CSC once (remembering where every CSC value comes from,
-/// so `factor` refills values in O(nnz) without allocating) and runs faer's symbolic LU.
-pub struct FaerLu {
+/// The part of a faer direct solver that is its own: its symbolic analysis, numeric
+/// factorisation and triangular solves. [`FaerDirect`] does the rest.
+trait Factorisation {
+    /// [`LinearSolver::name`].
+    const NAME: &'static str;
+    /// What the messages call the factorisation.
+    const LABEL: &'static str;
+    /// Drop the symbolic analysis and the numeric factorisation.
+    fn forget(&mut self);
+    /// Symbolic analysis of the square matrix `a` (checked); returns the scratch memory the
+    /// numeric factorisation and the solves need with parallelism `par`.
+    fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError>;
+    /// Numeric factorisation of the n×n matrix `a`, whose pattern is the analysed one (after a
+    /// successful `analyse`).
+    fn factor(&mut self, a: &CsrMatrix, n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError>;
+    /// Overwrite `rhs` with A⁻¹·rhs (after a successful `factor`).
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack);
+}
+
+/// A faer sparse direct solver: the factorisation `F` ([`LuFactors`] or [`CholeskyFactors`])
+/// and what both kinds share: the thread count, the kernel structure, the refinement settings,
+/// whether an analysis and a factorisation are held, the pattern stamp that decides whether the
+/// analysis still holds, the counters, faer's workspace (sized at the analysis) and the work
+/// vectors of the refinement.
+pub struct FaerDirect<F> {
     threads: usize,
     par: Par,
     structure: FactorStructure,
     refine: Refinement,
+    analysed: bool,
+    factored: bool,
     stamp: PatternStamp,
     analyses: usize,
     refinements: usize,
     n: usize,
-    symbolic: Option<SymbolicLu<usize>>,
-    numeric: NumericLu<usize, f64>,
-    factored: bool,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    csc_pos: Vec<usize>,
-    csc_values: Vec<f64>,
     mem: MemBuffer,
     r: Vec<f64>,
     d: Vec<f64>,
+    fact: F,
 }
 
-impl FaerLu {
+impl<F: Default> FaerDirect<F> {
     /// `threads` > 1 runs the numeric factorisation and solves with `Par::rayon(threads)`.
     pub fn new(threads: usize) -> Self {
         Self {
@@ -342,23 +342,21 @@ impl FaerLu {
             par: faer_par(threads),
             structure: FactorStructure::Auto,
             refine: Refinement::default(),
+            analysed: false,
+            factored: false,
             stamp: PatternStamp::default(),
             analyses: 0,
             refinements: 0,
             n: 0,
-            symbolic: None,
-            numeric: NumericLu::new(),
-            factored: false,
-            col_ptr: Vec::new(),
-            row_idx: Vec::new(),
-            csc_pos: Vec::new(),
-            csc_values: Vec::new(),
             mem: MemBuffer::new(StackReq::empty()),
             r: Vec::new(),
             d: Vec::new(),
+            fact: F::default(),
         }
     }
+}
 
+impl<F> FaerDirect<F> {
     /// Force simplicial / supernodal kernels (takes effect at the next analysis).
     pub fn with_structure(mut self, s: FactorStructure) -> Self {
         self.structure = s;
@@ -385,81 +383,48 @@ impl FaerLu {
     pub fn last_refinements(&self) -> usize {
         self.refinements
     }
-
-    fn csc_symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
-        // Invariants were checked when the pattern was converted in `analyze`.
-        SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
-    }
 }
 
-impl LinearSolver for FaerLu {
+impl<F: Factorisation + Send> LinearSolver for FaerDirect<F> {
     fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.symbolic.is_some() && self.stamp.matches(a) {
+        if self.analysed && self.stamp.matches(a) {
             return Ok(());
         }
         self.stamp.clear();
-        self.symbolic = None;
+        self.analysed = false;
         self.factored = false;
+        self.fact.forget();
         check_square(a)?;
         let n = a.nrows;
         self.n = n;
-        csr_to_csc_pattern(a, &mut self.col_ptr, &mut self.row_idx, &mut self.csc_pos);
-        self.csc_values.clear();
-        self.csc_values.resize(a.nnz(), 0.0);
-        let params = LuSymbolicParams {
-            supernodal_flop_ratio_threshold: self.structure.threshold(),
-            ..Default::default()
+        let req = self.fact.analyse(a, self.structure, self.par)?;
+        let Ok(mem) = MemBuffer::try_new(req) else {
+            self.fact.forget();
+            return Err(LinalgError::Other(format!("out of memory for the {} workspace", F::LABEL)));
         };
-        let symbolic = factorize_symbolic_lu(self.csc_symbolic(), params)
-            .map_err(|e| LinalgError::Other(format!("faer symbolic LU failed: {e:?}")))?;
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_lu_scratch::<f64>(self.par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, self.par),
-        ]);
-        self.mem = MemBuffer::try_new(req)
-            .map_err(|_| LinalgError::Other("out of memory for the LU workspace".into()))?;
-        self.symbolic = Some(symbolic);
-        self.numeric = NumericLu::new();
+        self.mem = mem;
         self.r.resize(n, 0.0);
         self.d.resize(n, 0.0);
+        self.analysed = true;
         self.stamp = PatternStamp::of(a);
         self.analyses += 1;
         Ok(())
     }
 
     fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.symbolic.is_none() || !self.stamp.matches(a) {
-            self.analyze(a)?;
-        }
+        self.analyze(a)?; // nothing to do when the pattern is the analysed one
         self.factored = false;
-        for (v, &k) in self.csc_values.iter_mut().zip(&self.csc_pos) {
-            *v = a.values[k];
-        }
-        if let Some(k) = self.csc_values.iter().position(|v| !v.is_finite()) {
-            return Err(LinalgError::Other(format!("matrix entry {} is not finite", self.csc_pos[k])));
-        }
-        let sym = SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx);
-        let mat = SparseColMatRef::new(sym, &self.csc_values);
-        let symbolic = self.symbolic.as_ref().expect("analysed above");
-        let stack = MemStack::new(&mut self.mem);
-        match symbolic.factorize_numeric_lu(&mut self.numeric, mat, self.par, stack, Default::default()) {
-            Ok(_) => {
-                self.factored = true;
-                Ok(())
-            }
-            Err(LuError::SymbolicSingular { index }) => Err(LinalgError::Singular(format!(
-                "LU: no pivot available at elimination step {index} (structurally singular matrix)"
-            ))),
-            Err(LuError::Generic(e)) => Err(LinalgError::Other(format!("faer numeric LU failed: {e:?}"))),
-        }
+        self.fact.factor(a, self.n, self.par, &mut self.mem)?;
+        self.factored = true;
+        Ok(())
     }
 
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
-        if self.symbolic.is_none() {
+        if !self.analysed {
             return Err(LinalgError::NotAnalyzed);
         }
         if !self.factored {
-            return Err(LinalgError::Other("LU solve called without a successful factorisation".into()));
+            return Err(LinalgError::Other(format!("{} solve called without a successful factorisation", F::LABEL)));
         }
         if a.nrows != self.n || a.ncols != self.n {
             return Err(LinalgError::NotAnalyzed);
@@ -467,22 +432,93 @@ impl LinearSolver for FaerLu {
         check_vectors(self.n, b, x)?;
         let n = self.n;
         let par = self.par;
-        let symbolic = self.symbolic.as_ref().expect("checked");
-        let numeric = &self.numeric;
+        let fact = &self.fact;
         let mem = &mut self.mem;
-        let lu = LuRef::new_unchecked(symbolic, numeric);
         solve_checked(a, b, x, &mut self.r, &mut self.d, &self.refine, &mut self.refinements, |v| {
-            lu.solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(v, n, 1),
-                par,
-                MemStack::new(mem),
-            );
+            fact.solve_in_place(MatMut::from_column_major_slice_mut(v, n, 1), par, MemStack::new(mem));
         })
     }
 
     fn name(&self) -> &'static str {
-        "lu"
+        F::NAME
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// LU
+// ---------------------------------------------------------------------------------------------
+
+/// faer sparse LU with partial (row) pivoting and a COLAMD fill-reducing column ordering.
+///
+/// `analyze` converts the CSR pattern to CSC once (remembering where every CSC value comes from,
+/// so `factor` refills values in O(nnz) without allocating) and runs faer's symbolic LU.
+pub type FaerLu = FaerDirect<LuFactors>;
+
+/// What [`FaerLu`] holds of its own: the CSC copy of the matrix and faer's symbolic and numeric
+/// LU.
+#[derive(Default)]
+pub struct LuFactors {
+    symbolic: Option<SymbolicLu<usize>>,
+    numeric: NumericLu<usize, f64>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    csc_pos: Vec<usize>,
+    csc_values: Vec<f64>,
+}
+
+impl LuFactors {
+    fn csc_symbolic(&self, n: usize) -> SymbolicSparseColMatRef<'_, usize> {
+        // Invariants were checked when the pattern was converted in `analyse`.
+        SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx)
+    }
+}
+
+impl Factorisation for LuFactors {
+    const NAME: &'static str = "lu";
+    const LABEL: &'static str = "LU";
+
+    fn forget(&mut self) {
+        self.symbolic = None;
+    }
+
+    fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError> {
+        csr_to_csc_pattern(a, &mut self.col_ptr, &mut self.row_idx, &mut self.csc_pos);
+        self.csc_values.clear();
+        self.csc_values.resize(a.nnz(), 0.0);
+        let params = LuSymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(), ..Default::default() };
+        let symbolic = factorize_symbolic_lu(self.csc_symbolic(a.nrows), params)
+            .map_err(|e| LinalgError::Other(format!("faer symbolic LU failed: {e:?}")))?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, par),
+        ]);
+        self.symbolic = Some(symbolic);
+        self.numeric = NumericLu::new();
+        Ok(req)
+    }
+
+    fn factor(&mut self, a: &CsrMatrix, n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError> {
+        for (v, &k) in self.csc_values.iter_mut().zip(&self.csc_pos) {
+            *v = a.values[k];
+        }
+        if let Some(k) = self.csc_values.iter().position(|v| !v.is_finite()) {
+            return Err(LinalgError::Other(format!("matrix entry {} is not finite", self.csc_pos[k])));
+        }
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
+        let mat = SparseColMatRef::new(sym, &self.csc_values);
+        let symbolic = self.symbolic.as_ref().expect("analysed");
+        match symbolic.factorize_numeric_lu(&mut self.numeric, mat, par, MemStack::new(mem), Default::default()) {
+            Ok(_) => Ok(()),
+            Err(LuError::SymbolicSingular { index }) => Err(LinalgError::Singular(format!(
+                "LU: no pivot available at elimination step {index} (structurally singular matrix)"
+            ))),
+            Err(LuError::Generic(e)) => Err(LinalgError::Other(format!("faer numeric LU failed: {e:?}"))),
+        }
+    }
+
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
+        let symbolic = self.symbolic.as_ref().expect("factored");
+        LuRef::new_unchecked(symbolic, &self.numeric).solve_in_place_with_conj(Conj::No, rhs, par, stack);
     }
 }
 
@@ -512,105 +548,48 @@ pub enum CholeskyKind {
 /// The numeric factorisation tries LLᵀ; when a pivot is not positive it falls back on the same
 /// symbolic structure to faer's intranode Bunch–Kaufman LBLᵀ (supernodal structure) and then to
 /// an unpivoted LDLᵀ; if all fail the result is [`LinalgError::Singular`].
-pub struct FaerCholesky {
-    threads: usize,
-    par: Par,
-    structure: FactorStructure,
+pub type FaerCholesky = FaerDirect<CholeskyFactors>;
+
+/// What [`FaerCholesky`] holds of its own: the ordering, faer's symbolic factorisation, the
+/// factor values and the pivoting data of LBLᵀ.
+#[derive(Default)]
+pub struct CholeskyFactors {
     ordering: FillOrdering,
-    refine: Refinement,
-    stamp: PatternStamp,
-    analyses: usize,
-    refinements: usize,
-    n: usize,
     symbolic: Option<SymbolicCholesky<usize>>,
     kind: Option<CholeskyKind>,
     l_values: Vec<f64>,
     subdiag: Vec<f64>,
     perm_fwd: Vec<usize>,
     perm_inv: Vec<usize>,
-    mem: MemBuffer,
-    r: Vec<f64>,
-    d: Vec<f64>,
 }
 
-impl FaerCholesky {
-    /// `threads` > 1 runs the numeric factorisation and solves with `Par::rayon(threads)`.
-    pub fn new(threads: usize) -> Self {
-        Self {
-            threads,
-            par: faer_par(threads),
-            structure: FactorStructure::Auto,
-            ordering: FillOrdering::default(),
-            refine: Refinement::default(),
-            stamp: PatternStamp::default(),
-            analyses: 0,
-            refinements: 0,
-            n: 0,
-            symbolic: None,
-            kind: None,
-            l_values: Vec::new(),
-            subdiag: Vec::new(),
-            perm_fwd: Vec::new(),
-            perm_inv: Vec::new(),
-            mem: MemBuffer::new(StackReq::empty()),
-            r: Vec::new(),
-            d: Vec::new(),
-        }
-    }
-
-    /// Force simplicial / supernodal kernels (takes effect at the next analysis).
-    pub fn with_structure(mut self, s: FactorStructure) -> Self {
-        self.structure = s;
-        self.stamp.clear();
-        self
-    }
-
-    /// Replace the post-solve refinement / singularity-check settings.
-    pub fn with_refinement(mut self, r: Refinement) -> Self {
-        self.refine = r;
-        self
-    }
-
-    pub fn threads(&self) -> usize {
-        self.threads
-    }
-
-    /// Number of symbolic analyses performed so far.
-    pub fn analyses(&self) -> usize {
-        self.analyses
-    }
-
-    /// Iterative-refinement steps taken by the last solve.
-    pub fn last_refinements(&self) -> usize {
-        self.refinements
-    }
-
+impl FaerDirect<CholeskyFactors> {
     /// Choose the fill-reducing ordering (takes effect at the next analysis).
     pub fn with_ordering(mut self, o: FillOrdering) -> Self {
-        self.ordering = o;
+        self.fact.ordering = o;
         self.stamp.clear();
         self
     }
 
     pub fn ordering(&self) -> FillOrdering {
-        self.ordering
+        self.fact.ordering
     }
 
     /// Length of the factor's value storage of the current analysis (nonzeros of L for the
     /// simplicial structure; the supernodal structure also stores the zeros of its dense
     /// blocks).
     pub fn factor_len(&self) -> Option<usize> {
-        self.symbolic.as_ref().map(|s| s.len_val())
+        self.fact.symbolic.as_ref().map(|s| s.len_val())
     }
 
     /// The factorisation currently held (`None` before a successful `factor`).
     pub fn kind(&self) -> Option<CholeskyKind> {
-        self.kind
+        self.fact.kind
     }
 
     /// Whether faer chose (or was forced to) supernodal kernels for the current analysis.
     pub fn is_supernodal(&self) -> Option<bool> {
-        self.symbolic.as_ref().map(|s| matches!(s.raw(), SymbolicCholeskyRaw::Supernodal(_)))
+        self.fact.symbolic.as_ref().map(|s| matches!(s.raw(), SymbolicCholeskyRaw::Supernodal(_)))
     }
 }
 
@@ -619,27 +598,24 @@ fn csr_as_csc(a: &CsrMatrix) -> SymbolicSparseColMatRef<'_, usize> {
     SymbolicSparseColMatRef::new_checked(a.nrows, a.ncols, &a.row_ptr, None, &a.col_idx)
 }
 
-impl LinearSolver for FaerCholesky {
-    fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.symbolic.is_some() && self.stamp.matches(a) {
-            return Ok(());
-        }
-        self.stamp.clear();
+impl Factorisation for CholeskyFactors {
+    const NAME: &'static str = "cholesky";
+    const LABEL: &'static str = "Cholesky";
+
+    fn forget(&mut self) {
         self.symbolic = None;
         self.kind = None;
-        check_square(a)?;
+    }
+
+    fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError> {
         let n = a.nrows;
-        self.n = n;
-        let symbolic = symbolic_cholesky(a, self.ordering, self.structure)?;
-        let par = self.par;
+        let symbolic = symbolic_cholesky(a, self.ordering, structure)?;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, par),
         ]);
-        self.mem = MemBuffer::try_new(req)
-            .map_err(|_| LinalgError::Other("out of memory for the Cholesky workspace".into()))?;
         self.l_values.clear();
         self.l_values.resize(symbolic.len_val(), 0.0);
         self.subdiag.resize(n, 0.0);
@@ -647,25 +623,17 @@ impl LinearSolver for FaerCholesky {
         self.perm_fwd.extend(0..n);
         self.perm_inv.clear();
         self.perm_inv.extend(0..n);
-        self.r.resize(n, 0.0);
-        self.d.resize(n, 0.0);
         self.symbolic = Some(symbolic);
-        self.stamp = PatternStamp::of(a);
-        self.analyses += 1;
-        Ok(())
+        Ok(req)
     }
 
-    fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.symbolic.is_none() || !self.stamp.matches(a) {
-            self.analyze(a)?;
-        }
+    fn factor(&mut self, a: &CsrMatrix, _n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError> {
         self.kind = None;
         if let Some(k) = a.values.iter().position(|v| !v.is_finite()) {
             return Err(LinalgError::Other(format!("matrix entry {k} is not finite")));
         }
-        let symbolic = self.symbolic.as_ref().expect("analysed above");
+        let symbolic = self.symbolic.as_ref().expect("analysed");
         let mat = SparseColMatRef::new(csr_as_csc(a), &a.values);
-        let par = self.par;
 
         let llt = symbolic.factorize_numeric_llt(
             &mut self.l_values,
@@ -673,7 +641,7 @@ impl LinearSolver for FaerCholesky {
             Side::Lower,
             Default::default(),
             par,
-            MemStack::new(&mut self.mem),
+            MemStack::new(mem),
             Default::default(),
         );
         let llt_pivot = match llt {
@@ -697,7 +665,7 @@ impl LinearSolver for FaerCholesky {
                     mat,
                     Side::Lower,
                     par,
-                    MemStack::new(&mut self.mem),
+                    MemStack::new(mem),
                     Default::default(),
                 );
             });
@@ -712,7 +680,7 @@ impl LinearSolver for FaerCholesky {
 
         let ldlt = without_panics(|| {
             symbolic
-                .factorize_numeric_ldlt(&mut self.l_values, mat, Side::Lower, Default::default(), par, MemStack::new(&mut self.mem), Default::default())
+                .factorize_numeric_ldlt(&mut self.l_values, mat, Side::Lower, Default::default(), par, MemStack::new(mem), Default::default())
                 .map(|_| ())
         });
         let Some(ldlt) = ldlt else {
@@ -738,40 +706,16 @@ impl LinearSolver for FaerCholesky {
         }
     }
 
-    fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
-        if self.symbolic.is_none() {
-            return Err(LinalgError::NotAnalyzed);
-        }
-        let Some(kind) = self.kind else {
-            return Err(LinalgError::Other("Cholesky solve called without a successful factorisation".into()));
-        };
-        if a.nrows != self.n || a.ncols != self.n {
-            return Err(LinalgError::NotAnalyzed);
-        }
-        check_vectors(self.n, b, x)?;
-        let n = self.n;
-        let par = self.par;
-        let symbolic = self.symbolic.as_ref().expect("checked");
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
+        let symbolic = self.symbolic.as_ref().expect("factored");
         let l_values = &self.l_values;
-        let subdiag = &self.subdiag;
-        let (perm_fwd, perm_inv) = (&self.perm_fwd, &self.perm_inv);
-        let mem = &mut self.mem;
-        solve_checked(a, b, x, &mut self.r, &mut self.d, &self.refine, &mut self.refinements, |v| {
-            let rhs = MatMut::from_column_major_slice_mut(v, n, 1);
-            let stack = MemStack::new(mem);
-            match kind {
-                CholeskyKind::Llt => LltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
-                CholeskyKind::Ldlt => LdltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
-                CholeskyKind::Lblt => {
-                    let perm = PermRef::new_checked(perm_fwd, perm_inv, n);
-                    IntranodeLbltRef::new(symbolic, l_values, subdiag, perm)
-                        .solve_in_place_with_conj(Conj::No, rhs, par, stack)
-                }
+        match self.kind.expect("factored") {
+            CholeskyKind::Llt => LltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
+            CholeskyKind::Ldlt => LdltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
+            CholeskyKind::Lblt => {
+                let perm = PermRef::new_checked(&self.perm_fwd, &self.perm_inv, rhs.nrows());
+                IntranodeLbltRef::new(symbolic, l_values, &self.subdiag, perm).solve_in_place_with_conj(Conj::No, rhs, par, stack)
             }
-        })
-    }
-
-    fn name(&self) -> &'static str {
-        "cholesky"
+        }
     }
 }

@@ -121,6 +121,26 @@ pub trait LinearSolver: Send {
     fn name(&self) -> &'static str;
 }
 
+/// `a` is square and its CSR arrays are consistent (what every `analyze` checks first).
+fn check_square(a: &CsrMatrix) -> Result<(), LinalgError> {
+    if a.nrows != a.ncols {
+        return Err(LinalgError::Other(format!("matrix is {}×{}, expected square", a.nrows, a.ncols)));
+    }
+    a.check_structure().map_err(|e| LinalgError::Other(format!("invalid CSR matrix: {e}")))
+}
+
+/// `b` and `x` have the matrix dimension `n` (what every `solve` checks).
+fn check_vectors(n: usize, b: &[f64], x: &[f64]) -> Result<(), LinalgError> {
+    if b.len() != n || x.len() != n {
+        return Err(LinalgError::Other(format!(
+            "vector lengths b = {}, x = {} do not match the matrix dimension {n}",
+            b.len(),
+            x.len()
+        )));
+    }
+    Ok(())
+}
+
 /// What a solve reports (iterations are 1 for direct solvers).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct SolveStats {

@@ -22,10 +22,7 @@ pub struct Pcg {
     preconditioner: Preconditioner,
     tol: f64,
     max_iterations: usize,
-    stamp: PatternStamp,
-    analyses: usize,
-    n: usize,
-    factored: bool,
+    state: CgState,
     /// Position of the diagonal entry of each row in `a.values`.
     diag_pos: Vec<usize>,
     /// Jacobi: 1 / a_ii.
@@ -39,11 +36,6 @@ pub struct Pcg {
     /// Scatter map used by the IC(0) factorisation (all `NONE` between rows).
     marker: Vec<usize>,
     ic_shift: f64,
-    // Work vectors of the iteration.
-    r: Vec<f64>,
-    z: Vec<f64>,
-    p: Vec<f64>,
-    ap: Vec<f64>,
 }
 
 impl Pcg {
@@ -52,10 +44,7 @@ impl Pcg {
             preconditioner,
             tol,
             max_iterations,
-            stamp: PatternStamp::default(),
-            analyses: 0,
-            n: 0,
-            factored: false,
+            state: CgState::default(),
             diag_pos: Vec::new(),
             inv_diag: Vec::new(),
             l_row_ptr: Vec::new(),
@@ -64,10 +53,6 @@ impl Pcg {
             l_val: Vec::new(),
             marker: Vec::new(),
             ic_shift: 0.0,
-            r: Vec::new(),
-            z: Vec::new(),
-            p: Vec::new(),
-            ap: Vec::new(),
         }
     }
 
@@ -85,7 +70,7 @@ impl Pcg {
 
     /// Number of pattern analyses performed so far.
     pub fn analyses(&self) -> usize {
-        self.analyses
+        self.state.analyses
     }
 
     /// Diagonal shift α used by the last IC(0) factorisation (the preconditioner is the IC(0)
@@ -96,7 +81,7 @@ impl Pcg {
 
     /// One attempt at IC(0) of A + alpha·diag(A). On a non-positive pivot returns its row.
     fn ic0_try(&mut self, a: &CsrMatrix, alpha: f64) -> Result<(), usize> {
-        let n = self.n;
+        let n = self.state.n;
         let (rp, col, src, val, marker) =
             (&self.l_row_ptr, &self.l_col, &self.l_src, &mut self.l_val, &mut self.marker);
         for i in 0..n {
@@ -175,8 +160,73 @@ impl Pcg {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Work vectors of [`cg`].
+#[derive(Default)]
+pub(crate) struct CgVectors {
+    pub(crate) r: Vec<f64>,
+    pub(crate) z: Vec<f64>,
+    pub(crate) p: Vec<f64>,
+    pub(crate) ap: Vec<f64>,
+}
+
+/// What the conjugate-gradient solvers ([`Pcg`], [`super::schwarz::SchwarzPcg`]) keep between
+/// calls besides their preconditioner: the analysed pattern and the number of analyses, the
+/// dimension, whether the preconditioner is set up for the current values, and the work vectors.
+#[derive(Default)]
+pub(crate) struct CgState {
+    pub(crate) stamp: PatternStamp,
+    pub(crate) analyses: usize,
+    pub(crate) n: usize,
+    pub(crate) factored: bool,
+    pub(crate) work: CgVectors,
+}
+
+impl CgState {
+    /// Whether the pattern of `a` is the analysed one.
+    pub(crate) fn is_analysed_for(&self, a: &CsrMatrix) -> bool {
+        self.analyses > 0 && self.stamp.matches(a)
+    }
+
+    /// Start an analysis of `a`: forget the pattern and the preconditioner, check that `a` is
+    /// square and well formed; returns its dimension.
+    pub(crate) fn begin_analysis(&mut self, a: &CsrMatrix) -> Result<usize, LinalgError> {
+        self.stamp.clear();
+        self.factored = false;
+        check_square(a)?;
+        self.n = a.nrows;
+        Ok(self.n)
+    }
+
+    /// End a successful analysis of `a`: the work vectors sized (zero), the pattern stamped and
+    /// counted.
+    pub(crate) fn finish_analysis(&mut self, a: &CsrMatrix) {
+        let w = &mut self.work;
+        for v in [&mut w.r, &mut w.z, &mut w.p, &mut w.ap] {
+            v.clear();
+            v.resize(self.n, 0.0);
+        }
+        self.stamp = PatternStamp::of(a);
+        self.analyses += 1;
+    }
+
+    /// ‖b‖ after checking the vector lengths; `None` when b = 0 (`x` is then set to the exact
+    /// solution 0), an error when b is not finite.
+    pub(crate) fn rhs_norm(&self, b: &[f64], x: &mut [f64]) -> Result<Option<f64>, LinalgError> {
+        check_vectors(self.n, b, x)?;
+        let bnorm = dot(b, b).sqrt();
+        if bnorm == 0.0 {
+            x.fill(0.0);
+            return Ok(None);
+        }
+        if !bnorm.is_finite() {
+            return Err(LinalgError::Other("right-hand side is not finite".into()));
+        }
+        Ok(Some(bnorm))
+    }
 }
 
 /// The product with the matrix and the preconditioner, as [`cg`] uses them.
@@ -268,17 +318,10 @@ pub(crate) fn cg(
 
 impl LinearSolver for Pcg {
     fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.analyses > 0 && self.stamp.matches(a) {
+        if self.state.is_analysed_for(a) {
             return Ok(());
         }
-        self.stamp.clear();
-        self.factored = false;
-        if a.nrows != a.ncols {
-            return Err(LinalgError::Other(format!("matrix is {}×{}, expected square", a.nrows, a.ncols)));
-        }
-        a.check_structure().map_err(|e| LinalgError::Other(format!("invalid CSR matrix: {e}")))?;
-        let n = a.nrows;
-        self.n = n;
+        let n = self.state.begin_analysis(a)?;
         self.diag_pos.clear();
         for i in 0..n {
             match a.find(i, i) {
@@ -313,20 +356,13 @@ impl LinearSolver for Pcg {
                 self.marker.resize(n, NONE);
             }
         }
-        for v in [&mut self.r, &mut self.z, &mut self.p, &mut self.ap] {
-            v.clear();
-            v.resize(n, 0.0);
-        }
-        self.stamp = PatternStamp::of(a);
-        self.analyses += 1;
+        self.state.finish_analysis(a);
         Ok(())
     }
 
     fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.analyses == 0 || !self.stamp.matches(a) {
-            self.analyze(a)?;
-        }
-        self.factored = false;
+        self.analyze(a)?; // nothing to do when the pattern is the analysed one
+        self.state.factored = false;
         self.ic_shift = 0.0;
         for (i, &k) in self.diag_pos.iter().enumerate() {
             let d = a.values[k];
@@ -364,33 +400,20 @@ impl LinearSolver for Pcg {
                 }
             }
         }
-        self.factored = true;
+        self.state.factored = true;
         Ok(())
     }
 
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
-        if self.analyses == 0 || a.nrows != self.n || a.ncols != self.n {
+        if self.state.analyses == 0 || a.nrows != self.state.n || a.ncols != self.state.n {
             return Err(LinalgError::NotAnalyzed);
         }
-        if !self.factored {
+        if !self.state.factored {
             return Err(LinalgError::Other("PCG solve called without a successful factor".into()));
         }
-        let n = self.n;
-        if b.len() != n || x.len() != n {
-            return Err(LinalgError::Other(format!(
-                "vector lengths b = {}, x = {} do not match the matrix dimension {n}",
-                b.len(),
-                x.len()
-            )));
-        }
-        let bnorm = dot(b, b).sqrt();
-        if bnorm == 0.0 {
-            x.fill(0.0);
+        let Some(bnorm) = self.state.rhs_norm(b, x)? else {
             return Ok(SolveStats { iterations: 0, relative_residual: 0.0 });
-        }
-        if !bnorm.is_finite() {
-            return Err(LinalgError::Other("right-hand side is not finite".into()));
-        }
+        };
         if !x.iter().all(|v| v.is_finite()) {
             x.fill(0.0);
         }
@@ -412,8 +435,9 @@ impl LinearSolver for Pcg {
             }
         }
         let (tol, max_iterations) = (self.tol, self.max_iterations);
-        let Self { preconditioner, inv_diag, l_row_ptr, l_col, l_val, r, z, p, ap, .. } = self;
+        let Self { preconditioner, inv_diag, l_row_ptr, l_col, l_val, state, .. } = self;
         let mut op = Op { a, pre: *preconditioner, inv_diag, l_row_ptr, l_col, l_val };
+        let CgVectors { r, z, p, ap } = &mut state.work;
         cg(&mut op, b, bnorm, x, tol, max_iterations, [r, z, p, ap], &mut 0)
     }
 

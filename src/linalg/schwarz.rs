@@ -36,8 +36,8 @@
 //!
 //! The matrix must be symmetric positive definite (penalty contact; not Lagrange multipliers).
 
-use super::csr::PatternStamp;
 use super::direct::{FaerCholesky, FaerLu, Refinement};
+use super::pcg::{cg, dot, CgOperator, CgState, CgVectors};
 use super::*;
 use crate::comm::Collective;
 use rayon::prelude::*;
@@ -133,15 +133,13 @@ pub struct SchwarzPcg {
     pool: Option<rayon::ThreadPool>,
     /// Whether the coarse space is used (two levels) or not (block Jacobi over the particles).
     two_level: bool,
-    stamp: PatternStamp,
-    analyses: usize,
+    /// Pattern, dimension, factorised or not, CG work vectors.
+    state: CgState,
     /// Symbolic analyses of particle blocks, and those kept from the previous pattern (a
     /// block whose own pattern did not change when the global one did: a new contact pair
     /// adds entries between particles, not inside them).
     block_analyses: usize,
     blocks_kept: usize,
-    n: usize,
-    factored: bool,
     /// Block of each equation (NONE: in no particle) and its index there.
     block_of: Vec<usize>,
     local: Vec<usize>,
@@ -194,10 +192,6 @@ pub struct SchwarzPcg {
     coarse_chol: Box<dyn LinearSolver>,
     coarse_rhs: Vec<f64>,
     coarse_sol: Vec<f64>,
-    r: Vec<f64>,
-    z: Vec<f64>,
-    p: Vec<f64>,
-    ap: Vec<f64>,
 }
 
 fn exact() -> Refinement {
@@ -216,10 +210,6 @@ fn exact_solver(symmetric: bool) -> Box<dyn LinearSolver> {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 impl SchwarzPcg {
     /// `threads` > 1 factorises and applies the blocks of this process on that many threads.
     pub fn new(sub: Subdomains, comm: Arc<dyn Collective>, tol: f64, max_iterations: usize, threads: usize) -> Self {
@@ -231,12 +221,9 @@ impl SchwarzPcg {
             max_iterations,
             pool,
             two_level: true,
-            stamp: PatternStamp::default(),
-            analyses: 0,
+            state: CgState::default(),
             block_analyses: 0,
             blocks_kept: 0,
-            n: 0,
-            factored: false,
             block_of: Vec::new(),
             local: Vec::new(),
             owned_row: Vec::new(),
@@ -267,17 +254,13 @@ impl SchwarzPcg {
             coarse_chol: Box::new(FaerCholesky::new(1).with_refinement(exact())),
             coarse_rhs: Vec::new(),
             coarse_sol: Vec::new(),
-            r: Vec::new(),
-            z: Vec::new(),
-            p: Vec::new(),
-            ap: Vec::new(),
         }
     }
 
     /// Without the coarse space: block Jacobi over the particles (for comparison).
     pub fn one_level(mut self) -> Self {
         self.two_level = false;
-        self.stamp.clear();
+        self.state.stamp.clear();
         self
     }
 
@@ -285,7 +268,7 @@ impl SchwarzPcg {
     /// strains (for comparison).
     pub fn rigid_coarse_space(mut self) -> Self {
         self.modes_used = 3;
-        self.stamp.clear();
+        self.state.stamp.clear();
         self
     }
 
@@ -297,7 +280,7 @@ impl SchwarzPcg {
 
     /// Number of pattern analyses performed so far.
     pub fn analyses(&self) -> usize {
-        self.analyses
+        self.state.analyses
     }
 
     /// Symbolic analyses of particle blocks so far, and how many blocks kept their analysis
@@ -310,7 +293,7 @@ impl SchwarzPcg {
     pub fn unsymmetric(mut self) -> Self {
         self.symmetric = false;
         self.blocks.clear();
-        self.stamp.clear();
+        self.state.stamp.clear();
         self
     }
 
@@ -349,7 +332,7 @@ impl SchwarzPcg {
 
     /// y = A x on the rows of this process, summed over the processes.
     fn mul(&self, a: &CsrMatrix, x: &[f64], y: &mut [f64]) {
-        for i in 0..self.n {
+        for i in 0..self.state.n {
             y[i] = if self.owned_row[i] {
                 let mut s = 0.0;
                 for k in a.row_ptr[i]..a.row_ptr[i + 1] {
@@ -424,7 +407,7 @@ struct Op<'s, 'a> {
     a: &'a CsrMatrix,
 }
 
-impl super::pcg::CgOperator for Op<'_, '_> {
+impl CgOperator for Op<'_, '_> {
     fn mul(&mut self, x: &[f64], y: &mut [f64]) {
         self.s.mul(self.a, x, y);
     }
@@ -435,17 +418,10 @@ impl super::pcg::CgOperator for Op<'_, '_> {
 
 impl LinearSolver for SchwarzPcg {
     fn analyze(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.analyses > 0 && self.stamp.matches(a) {
+        if self.state.is_analysed_for(a) {
             return Ok(());
         }
-        self.stamp.clear();
-        self.factored = false;
-        if a.nrows != a.ncols {
-            return Err(LinalgError::Other(format!("matrix is {}×{}, expected square", a.nrows, a.ncols)));
-        }
-        a.check_structure().map_err(|e| LinalgError::Other(format!("invalid CSR matrix: {e}")))?;
-        let n = a.nrows;
-        self.n = n;
+        let n = self.state.begin_analysis(a)?;
         let np = self.sub.blocks.len();
         if self.sub.modes.len() != np || self.sub.owned.len() != np {
             return Err(LinalgError::Other("Schwarz subdomains: blocks, modes and owners differ in length".into()));
@@ -655,20 +631,13 @@ impl LinearSolver for SchwarzPcg {
         }
         self.coarse_rhs = vec![0.0; m];
         self.coarse_sol = vec![0.0; m];
-        for v in [&mut self.r, &mut self.z, &mut self.p, &mut self.ap] {
-            v.clear();
-            v.resize(n, 0.0);
-        }
-        self.stamp = PatternStamp::of(a);
-        self.analyses += 1;
+        self.state.finish_analysis(a);
         Ok(())
     }
 
     fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
-        if self.analyses == 0 || !self.stamp.matches(a) {
-            self.analyze(a)?;
-        }
-        self.factored = false;
+        self.analyze(a)?; // nothing to do when the pattern is the analysed one
+        self.state.factored = false;
         let Self { blocks, pool, .. } = self;
         Self::run(pool, || {
             blocks.par_iter_mut().try_for_each(|b| {
@@ -691,7 +660,7 @@ impl LinearSolver for SchwarzPcg {
         self.phita.values.fill(0.0);
         self.coarse.values.fill(0.0);
         self.fallback_factored = false;
-        for i in 0..self.n {
+        for i in 0..self.state.n {
             if !self.owned_row[i] {
                 continue;
             }
@@ -740,35 +709,24 @@ impl LinearSolver for SchwarzPcg {
         if self.coarse.nrows > 0 {
             self.coarse_chol.factor(&self.coarse)?;
         }
-        self.factored = true;
+        self.state.factored = true;
         Ok(())
     }
 
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
-        if self.analyses == 0 || a.nrows != self.n {
+        if self.state.analyses == 0 || a.nrows != self.state.n {
             return Err(LinalgError::NotAnalyzed);
         }
-        if !self.factored {
+        if !self.state.factored {
             return Err(LinalgError::Other("Schwarz PCG solve called without a successful factor".into()));
         }
-        let n = self.n;
-        if b.len() != n || x.len() != n {
-            return Err(LinalgError::Other(format!("vector lengths b = {}, x = {} do not match the matrix dimension {n}", b.len(), x.len())));
-        }
-        let bnorm = dot(b, b).sqrt();
-        if bnorm == 0.0 {
-            x.fill(0.0);
+        let Some(bnorm) = self.state.rhs_norm(b, x)? else {
             return Ok(SolveStats { iterations: 0, relative_residual: 0.0 });
-        }
-        if !bnorm.is_finite() {
-            return Err(LinalgError::Other("right-hand side is not finite".into()));
-        }
+        };
         // the Newton update starts from zero: the same start on every process
         x.fill(0.0);
-        let mut r = std::mem::take(&mut self.r);
-        let mut z = std::mem::take(&mut self.z);
-        let mut p = std::mem::take(&mut self.p);
-        let mut ap = std::mem::take(&mut self.ap);
+        let mut work = std::mem::take(&mut self.state.work);
+        let CgVectors { r, z, p, ap } = &mut work;
         // CG (symmetric positive definite), or GMRES for an unsymmetric matrix and when CG
         // breaks down on an indefinite one (compressed columns of particles near buckling)
         let mut cg_iterations = 0;
@@ -776,7 +734,7 @@ impl LinearSolver for SchwarzPcg {
         if self.symmetric {
             let (tol, max_iterations) = (self.tol, self.max_iterations);
             let mut op = Op { s: self, a };
-            result = super::pcg::cg(&mut op, b, bnorm, x, tol, max_iterations, [&mut r, &mut z, &mut p, &mut ap], &mut cg_iterations);
+            result = cg(&mut op, b, bnorm, x, tol, max_iterations, [&mut *r, &mut *z, &mut *p, &mut *ap], &mut cg_iterations);
             if let Err(LinalgError::Singular(reason)) = &result {
                 if self.comm.is_root() {
                     tracing::debug!(%reason, "Schwarz CG broke down; GMRES takes over");
@@ -786,12 +744,12 @@ impl LinearSolver for SchwarzPcg {
         if let Err(LinalgError::Singular(_)) = &result {
             x.fill(0.0);
             self.gmres_solves += 1;
-            result = self.gmres(a, b, bnorm, x, &mut r, &mut z, &mut ap).map(|mut st| {
+            result = self.gmres(a, b, bnorm, x, r, z, ap).map(|mut st| {
                 st.iterations += cg_iterations;
                 st
             });
         }
-        (self.r, self.z, self.p, self.ap) = (r, z, p, ap);
+        self.state.work = work;
         match result {
             Err(e @ (LinalgError::Singular(_) | LinalgError::NotConverged { .. })) => {
                 // (every process sees the same breakdown: the iterates are the same everywhere)
@@ -902,7 +860,7 @@ impl SchwarzPcg {
     /// so the tolerance means what it means for CG), from `x`.
     #[allow(clippy::too_many_arguments)]
     fn gmres(&mut self, a: &CsrMatrix, b: &[f64], bnorm: f64, x: &mut [f64], r: &mut [f64], z: &mut [f64], w: &mut [f64]) -> Result<SolveStats, LinalgError> {
-        let n = self.n;
+        let n = self.state.n;
         let m = self.restart.max(1);
         // (near a buckling column of particles, or with sticking friction contacts, GMRES may
         // stagnate, and a direct solve is then the cheaper way out)

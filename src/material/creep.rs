@@ -299,11 +299,8 @@ pub fn creep_phi_inv(m: f64, eps0: f64, y: f64) -> f64 {
 }
 
 impl ConstitutiveLaw for Creep {
-    fn shear_modulus(&self) -> f64 {
-        lame_from_e_nu(self.e, self.nu).0
-    }
-    fn bulk_modulus(&self) -> Option<f64> {
-        lame_from_e_nu(self.e, self.nu).1
+    fn elastic_constants(&self) -> (f64, f64) {
+        (self.e, self.nu)
     }
     fn symmetric_tangent(&self) -> bool {
         false

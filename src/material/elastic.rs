@@ -33,11 +33,8 @@ impl Elastic {
 }
 
 impl ConstitutiveLaw for Elastic {
-    fn shear_modulus(&self) -> f64 {
-        lame_from_e_nu(self.e, self.nu).0
-    }
-    fn bulk_modulus(&self) -> Option<f64> {
-        lame_from_e_nu(self.e, self.nu).1
+    fn elastic_constants(&self) -> (f64, f64) {
+        (self.e, self.nu)
     }
     fn symmetric_tangent(&self) -> bool {
         true

@@ -32,11 +32,8 @@ impl J2Plastic {
 }
 
 impl ConstitutiveLaw for J2Plastic {
-    fn shear_modulus(&self) -> f64 {
-        lame_from_e_nu(self.e, self.nu).0
-    }
-    fn bulk_modulus(&self) -> Option<f64> {
-        lame_from_e_nu(self.e, self.nu).1
+    fn elastic_constants(&self) -> (f64, f64) {
+        (self.e, self.nu)
     }
     fn symmetric_tangent(&self) -> bool {
         false

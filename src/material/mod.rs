@@ -92,10 +92,18 @@ pub enum MaterialError {
 
 /// One constitutive law (see the module docs for the exact contract).
 pub trait ConstitutiveLaw: Send + Sync {
+    /// Young's modulus E (MPa) and Poisson's ratio ν of the (isotropic) elastic response.
+    fn elastic_constants(&self) -> (f64, f64);
     /// Small-strain shear modulus G (MPa).
-    fn shear_modulus(&self) -> f64;
+    fn shear_modulus(&self) -> f64 {
+        let (e, nu) = self.elastic_constants();
+        lame_from_e_nu(e, nu).0
+    }
     /// Bulk modulus K (MPa), or `None` when the law is incompressible (ν = 0.5).
-    fn bulk_modulus(&self) -> Option<f64>;
+    fn bulk_modulus(&self) -> Option<f64> {
+        let (e, nu) = self.elastic_constants();
+        lame_from_e_nu(e, nu).1
+    }
     /// Whether the consistent tangent `cc` has major symmetry (lets the driver pick a
     /// symmetric factorisation).
     fn symmetric_tangent(&self) -> bool;
@@ -134,11 +142,8 @@ impl Material {
 }
 
 impl ConstitutiveLaw for Material {
-    fn shear_modulus(&self) -> f64 {
-        self.law().shear_modulus()
-    }
-    fn bulk_modulus(&self) -> Option<f64> {
-        self.law().bulk_modulus()
+    fn elastic_constants(&self) -> (f64, f64) {
+        self.law().elastic_constants()
     }
     fn symmetric_tangent(&self) -> bool {
         self.law().symmetric_tangent()
