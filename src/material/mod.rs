@@ -125,11 +125,7 @@ impl Material {
     /// Young's modulus E (MPa): the stiffness scale of the default contact penalty 10 E/h and
     /// of the stabilisation springs.
     pub fn youngs_modulus(&self) -> f64 {
-        match self {
-            Material::Elastic(m) => m.e,
-            Material::J2(m) => m.e,
-            Material::Creep(m) => m.e,
-        }
+        self.law().elastic_constants().0
     }
 
     fn law(&self) -> &dyn ConstitutiveLaw {
