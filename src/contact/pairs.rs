@@ -85,7 +85,8 @@ impl PairSet {
         // per slave node: the candidate segment with the smallest distance whose projection
         // falls on it (small tolerance at the ends)
         let slave_index: HashMap<usize, usize> = b.slaves.iter().enumerate().map(|(i, (n, _))| (*n, i)).collect();
-        let mut best: HashMap<usize, (f64, Vec<usize>)> = HashMap::new();
+        // (distance, the closest segments, how many: at most two, a tie)
+        let mut best: HashMap<usize, (f64, [usize; 2], usize)> = HashMap::with_capacity(b.slaves.len());
         let cohering = matches!(kind, ContactKind::Cohering);
         for (node, seg) in candidates {
             let s = b.segments[seg];
@@ -124,22 +125,23 @@ impl PairSet {
             // dependent rows (the regularised ones take them)
             let tie = if exact_ties { -1.0 } else { TIE * h };
             match best.get_mut(&si) {
-                Some((db, segs)) if (d - *db).abs() <= tie => {
-                    if segs.len() < 2 && !segs.contains(&seg) {
-                        segs.push(seg);
+                Some((db, segs, n)) if (d - *db).abs() <= tie => {
+                    if *n < 2 && !segs[..*n].contains(&seg) {
+                        segs[*n] = seg;
+                        *n += 1;
                     }
                 }
-                Some((db, _)) if *db < d => {}
+                Some((db, _, _)) if *db < d => {}
                 _ => {
-                    best.insert(si, (d, vec![seg]));
+                    best.insert(si, (d, [seg, seg], 1));
                 }
             }
         }
         let mut pairs: Vec<FrozenPair> = best
             .into_iter()
-            .flat_map(|(slave, (_, segs))| {
-                let w = 1.0 / segs.len() as f64;
-                segs.into_iter().map(move |segment| FrozenPair { slave, segment, weight: w })
+            .flat_map(|(slave, (_, segs, n))| {
+                let w = 1.0 / n as f64;
+                segs.into_iter().take(n).map(move |segment| FrozenPair { slave, segment, weight: w })
             })
             .collect();
         pairs.sort_by_key(|p| (p.slave, p.segment));
