@@ -286,7 +286,7 @@ impl ContactEvals {
 }
 
 /// Where the tangent blocks of an evaluation go: the matrix values and the positions of the
-/// pair blocks (one per frozen pair, over [`ContactProblem::pair_dofs`]), of the node blocks
+/// pair blocks (one per frozen pair, over [`ContactProblem::pair_dof_lists`]), of the node blocks
 /// (one per slave node, its two dofs: the wall pairs) and of the multiplier blocks (one per
 /// candidate, over [`ContactProblem::multiplier_dofs`] and its own row last).
 pub struct ContactTangent<'a> {

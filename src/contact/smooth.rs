@@ -2,7 +2,7 @@
 //!
 //! # Why
 //!
-//! With the straight-segment kernel ([`super::kernels::nts_pair`]) the contact normal of a
+//! With the straight-segment kernel ([`super::enforce::segment_pair`]) the contact normal of a
 //! slave node is the normal of its closest master segment. A node that slides round a convex
 //! master corner (the 135° corners of the paper's octagons) changes segment, and the normal
 //! turns at once by the corner's turning angle (45°); the state that converged with the old

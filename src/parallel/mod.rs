@@ -21,10 +21,10 @@
 //! node-to-wall kernels of the slave nodes of its own particles only. The master segments a
 //! process's slaves see on other processes' particles (the ghosts of the contact zones) are
 //! at hand, as every process holds the whole configuration. The evaluated pairs go to every
-//! process as records (forces, gaps, pressures, trial and augmented histories; the tangent
-//! blocks to process 0 only, [`Collective::all_gather_varcount`] /
-//! [`Collective::gather_varcount_to_root`]), and every process adds them in the serial order
-//! ([`crate::contact::driver::PairExchange`]): the contact histories, statistics and nodal
+//! process (forces, gaps, pressures, trial and augmented histories; the tangent blocks to
+//! process 0 only: [`Distribution::gather_contact`], the one place that knows how an
+//! evaluation is laid out for the exchange), and every process adds them in the serial order
+//! ([`crate::contact::ContactProblem::apply`]): the contact histories, statistics and nodal
 //! contact fields are then the same everywhere and bit-identical to the serial run's. The
 //! contact forces are added on every process after the element forces are summed, the contact
 //! tangent on process 0 only. Lagrange multipliers (`method = "lagrange"`) are still evaluated

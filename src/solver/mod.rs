@@ -10,7 +10,7 @@
 //!    extrapolating the last converged increment;
 //! 2. Newton iterations `K Δu = F_ext − F_int` (`newton`) until ‖R‖ ≤ tol_R · reference force
 //!    and |Δu·R| ≤ tol_E · |Δu₀·R₀|, each residual and tangent formed by the one assembler from
-//!    every force term ([`Simulation::evaluate`], `system`); material states are evaluated from
+//!    every force term (`Simulation::evaluate`, `system`); material states are evaluated from
 //!    the committed ones and never changed inside the iterations;
 //! 3. for incompressible bodies the multipliers are updated (λ_e ← p_e), for the augmented
 //!    Lagrangian contact the pair multipliers, and step 2 repeats until max |Θ_e − 1| ≤

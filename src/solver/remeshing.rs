@@ -19,7 +19,7 @@ impl Simulation {
     /// The run's counters, energies and initial areas (for the volume error) are kept.
     /// The contact history of every pair (stick anchors, augmented-Lagrangian and Lagrange
     /// multipliers, wall histories) and the tributary lengths of the kept contact zones are
-    /// carried to the new numbering ([`ContactProblem::carry_history`]).
+    /// carried to the new numbering ([`crate::contact::ContactProblem::carry_history`]).
     ///
     /// # Errors
     /// [`SolveError::Remesh`] for an implicit dynamic analysis (velocities and accelerations

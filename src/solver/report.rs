@@ -76,7 +76,7 @@ pub struct RunSummary {
     /// observer gave for stopping the run after a step (e.g. "interrupted by SIGTERM").
     pub stop_reason: String,
     /// Whether the run was stopped by its observer before its end (see
-    /// [`Simulation::run_controlled`]).
+    /// [`super::Simulation::run_controlled`]).
     pub interrupted: bool,
     /// Wall time spent per phase (s).
     pub timing: Timing,

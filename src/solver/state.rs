@@ -43,7 +43,7 @@ pub struct SimScalars {
 }
 
 /// The state of a simulation between two steps that is not rebuilt from its model
-/// ([`Simulation::state`], [`Simulation::set_state`]).
+/// ([`super::Simulation::state`], [`super::Simulation::set_state`]).
 #[derive(Clone, Debug)]
 pub struct SimState {
     pub scalars: SimScalars,
@@ -55,7 +55,7 @@ pub struct SimState {
     pub dynamics: Option<[Vec<f64>; 4]>,
 }
 
-/// The counts of [`PartitionStats`] that add up over a run (and over its restarts, whatever
+/// The counts of [`crate::parallel::PartitionStats`] that add up over a run (and over its restarts, whatever
 /// the number of processes), kept in a checkpoint.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(default)]

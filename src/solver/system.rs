@@ -1,6 +1,6 @@
 //! The global system of a simulation: the one assembler and its pattern, the matrix and the
 //! vectors of a Newton iteration, the linear solver and the processes it runs on — and the one
-//! way a residual and a tangent are formed ([`Simulation::evaluate`]).
+//! way a residual and a tangent are formed (`Simulation::evaluate`).
 //!
 //! Every force term is a local contribution scattered into the one pattern, in a fixed order:
 //! 1. the element kernels (colour-parallel, [`crate::assembly::Assembler::assemble`]; on several
