@@ -5,7 +5,8 @@
 //!   (contact established; the state is restored before every sample, so each sample is the
 //!   same step: pair selection, pattern, Newton with assembly, contact, factorisation).
 //! - `pair_change_*`: the assembler's pattern switched between the pair sets of two
-//!   configurations of a disc grid (`bench_support::pair_change_fixture`), incrementally
+//!   configurations of a disc grid (`bench_support::pair_change_fixture`: every other disc
+//!   moved by 0.4 element sizes, so the contact zones have other pairs), incrementally
 //!   (`switch`, what a step does now) and rebuilt from the mesh (`rebuild`, what it did before).
 //!
 //! Run: `cargo bench --bench step`. For a step time before/after a change, measured in one

@@ -261,9 +261,9 @@ pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
 }
 
 /// The contact pattern of an `n × n` disc grid at two configurations: the reference one
-/// (neighbours at solid ratio 0.78, almost touching) and the same shrunk by 1 % towards the
-/// die's centre (the discs overlap their neighbours a little: more and other pairs). Switching
-/// the assembler between the two pair sets is a change of contact pairs.
+/// (neighbours at solid ratio 0.78, almost touching) and the same with every other disc moved
+/// by 0.4 element sizes along y (the nodes of the contact zones face other segments: other
+/// pairs). Switching the assembler between the two pair sets is a change of contact pairs.
 pub struct PairChange {
     pub model: Model,
     pub assembler: Assembler,
@@ -280,12 +280,17 @@ pub fn pair_change_fixture(n: usize, mesh_size: f64) -> PairChange {
     let model = Model::from_case(&case).expect("benchmark model");
     let mut contact = model.contact_problem().expect("a contact problem");
     let walls = model.wall_planes(0.0);
-    let c = 0.5 * side;
-    let shrunk: Vec<[f64; 2]> = model.x0.iter().map(|p| [c + 0.99 * (p[0] - c), c + 0.99 * (p[1] - c)]).collect();
+    let mut moved = model.x0.clone();
+    for body in model.bodies.iter().skip(1).step_by(2) {
+        for p in &mut moved[body.node_offset..body.node_offset + body.mesh.n_nodes()] {
+            p[1] += 0.4 * mesh_size;
+        }
+    }
     contact.select_pairs(&model.x0, &walls);
     let a = contact.pair_dof_lists();
-    contact.select_pairs(&shrunk, &walls);
+    contact.select_pairs(&moved, &walls);
     let b = contact.pair_dof_lists();
+    assert_ne!(a, b, "the two configurations must have other pairs");
     let (eq, n_free) = number_equations(model.n_dofs(), std::iter::empty());
     let (assembler, kk) = Assembler::new(&model, eq, n_free);
     PairChange { model, assembler, kk, pairs: [a, b] }
