@@ -286,3 +286,204 @@ fn geometry_widths() {
     assert_eq!(state(Geo::Segment, -0.01).len(), 6);
     assert_eq!(state(Geo::Wall, -0.01).len(), 2);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Barrier contact (src/contact/barrier.rs): the squared distances and the barrier energy of a
+// point–edge pair in each of its three regions, next to the region boundaries on both sides,
+// next to the clamp at d̂ on both sides, and of a point against a wall. Checked against central
+// finite differences (step 1e-7 mm relative to a unit-sized configuration, tolerance 1e-6
+// relative to the largest entry, as for the other kernels): the gradient against the energy,
+// the Hessian against the gradient. Across a region boundary d² is C¹ (the gradient agrees from
+// both sides to 1e-6 relative), and across the clamp the barrier is C² (energy, gradient and
+// Hessian tend to zero there).
+// ---------------------------------------------------------------------------------------------
+
+mod barrier_battery {
+    use mpfem::contact::barrier::*;
+
+    const H: f64 = 1e-7;
+    const TOL: f64 = 1e-6;
+
+    fn unpack(x: &[f64; 6]) -> ([f64; 2], [f64; 2], [f64; 2]) {
+        ([x[0], x[1]], [x[2], x[3]], [x[4], x[5]])
+    }
+
+    fn pe(x: &[f64; 6]) -> SqDistance<6> {
+        let (p, a, b) = unpack(x);
+        point_edge_sq_distance(p, a, b)
+    }
+
+    /// Central differences of a scalar and of a vector function of the 6 dofs.
+    fn fd_grad(f: &dyn Fn(&[f64; 6]) -> f64, x: &[f64; 6]) -> [f64; 6] {
+        let mut g = [0.0; 6];
+        for i in 0..6 {
+            let (mut xp, mut xm) = (*x, *x);
+            xp[i] += H;
+            xm[i] -= H;
+            g[i] = (f(&xp) - f(&xm)) / (2.0 * H);
+        }
+        g
+    }
+
+    fn fd_jac(f: &dyn Fn(&[f64; 6]) -> [f64; 6], x: &[f64; 6]) -> [[f64; 6]; 6] {
+        let mut j = [[0.0; 6]; 6];
+        for k in 0..6 {
+            let (mut xp, mut xm) = (*x, *x);
+            xp[k] += H;
+            xm[k] -= H;
+            let (fp, fm) = (f(&xp), f(&xm));
+            for i in 0..6 {
+                j[i][k] = (fp[i] - fm[i]) / (2.0 * H);
+            }
+        }
+        j
+    }
+
+    fn close_vec(a: &[f64], b: &[f64], what: &str) {
+        let scale = a.iter().chain(b).fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0, "{what}: all zero, nothing checked");
+        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+            assert!((x - y).abs() <= TOL * scale, "{what}[{i}]: {x} against {y} (scale {scale})");
+        }
+    }
+
+    fn close_mat(a: &[[f64; 6]; 6], b: &[[f64; 6]; 6], what: &str) {
+        let fa: Vec<f64> = a.iter().flatten().copied().collect();
+        let fb: Vec<f64> = b.iter().flatten().copied().collect();
+        close_vec(&fa, &fb, what);
+    }
+
+    /// A configuration: edge a = (0.1, −0.05), b = (1.05, 0.08) and the point at projection
+    /// parameter `s` and distance `h` from the edge's line (on its left).
+    fn config(s: f64, h: f64) -> [f64; 6] {
+        let (a, b): ([f64; 2], [f64; 2]) = ([0.1, -0.05], [1.05, 0.08]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let l = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let n = [-e[1] / l, e[0] / l];
+        [a[0] + s * e[0] + h * n[0], a[1] + s * e[1] + h * n[1], a[0], a[1], b[0], b[1]]
+    }
+
+    /// The distance battery: gradient and Hessian of d² against finite differences.
+    fn check_distance(x: &[f64; 6], what: &str) {
+        let d = pe(x);
+        close_vec(&d.grad, &fd_grad(&|y| pe(y).d2, x), &format!("{what}: ∇d²"));
+        close_mat(&d.hess, &fd_jac(&|y| pe(y).grad, x), &format!("{what}: ∇²d²"));
+        for i in 0..6 {
+            for k in 0..6 {
+                assert!((d.hess[i][k] - d.hess[k][i]).abs() <= 1e-12, "{what}: Hessian not symmetric");
+            }
+        }
+    }
+
+    /// The barrier battery: energy → gradient → Hessian (exact, not projected).
+    fn check_barrier(x: &[f64; 6], dhat: f64, kappa: f64, what: &str) {
+        let t = barrier_term(&pe(x), dhat, kappa, false).unwrap_or_else(|| panic!("{what}: pair beyond d̂"));
+        let energy = |y: &[f64; 6]| barrier_term(&pe(y), dhat, kappa, false).map_or(0.0, |t| t.energy);
+        let grad = |y: &[f64; 6]| barrier_term(&pe(y), dhat, kappa, false).map_or([0.0; 6], |t| t.grad);
+        assert!(t.energy > 0.0, "{what}: energy {}", t.energy);
+        close_vec(&t.grad, &fd_grad(&energy, x), &format!("{what}: barrier gradient"));
+        close_mat(&t.hess, &fd_jac(&grad, x), &format!("{what}: barrier Hessian"));
+    }
+
+    #[test]
+    fn point_edge_distance_in_every_region_and_next_to_their_boundaries() {
+        for (s, what) in [(-0.4, "end a"), (0.37, "interior"), (1.3, "end b"), (-1e-5, "just before a"), (1e-5, "just after a"), (1.0 - 1e-5, "just before b"), (1.0 + 1e-5, "just after b")] {
+            for h in [0.3, -0.2, 1e-3] {
+                check_distance(&config(s, h), &format!("{what}, h = {h}"));
+            }
+        }
+    }
+
+    #[test]
+    fn the_distance_gradient_is_continuous_across_the_region_boundaries() {
+        for s0 in [0.0, 1.0] {
+            let left = pe(&config(s0 - 1e-10, 0.2));
+            let right = pe(&config(s0 + 1e-10, 0.2));
+            let region = |s: f64| {
+                let (p, a, b) = unpack(&config(s, 0.2));
+                point_edge_region(p, a, b)
+            };
+            let expect = if s0 == 0.0 { (PointEdgeRegion::A, PointEdgeRegion::Interior) } else { (PointEdgeRegion::Interior, PointEdgeRegion::B) };
+            assert_eq!((region(s0 - 1e-10), region(s0 + 1e-10)), expect);
+            assert!((left.d2 - right.d2).abs() < 1e-9);
+            close_vec(&left.grad, &right.grad, &format!("∇d² across s = {s0}"));
+        }
+    }
+
+    #[test]
+    fn barrier_gradient_and_hessian_in_every_region_and_across_the_clamp() {
+        let kappa = 3.0e4;
+        for dhat in [0.05, 0.5] {
+            for (s, what) in [(-0.2, "end a"), (0.37, "interior"), (1.2, "end b"), (-1e-5, "just before a"), (1e-5, "just after a"), (1.0 + 1e-5, "just after b")] {
+                // distances from deep inside the barrier to next to the clamp (closer to it the barrier
+                // is O((d² − d̂²)³) and finite differences lose their digits; the limit is checked
+                // in `the_barrier_vanishes_with_two_derivatives_at_the_clamp`)
+                for frac in [0.02, 0.3, 0.9, 0.99] {
+                    // the point's distance to the edge is frac·d̂ (along the region's direction)
+                    let h = if (0.0..=1.0).contains(&s) { frac * dhat } else {
+                        let e = 0.95f64.hypot(0.13);
+                        let along = if s < 0.0 { -s } else { s - 1.0 } * e;
+                        let r = frac * dhat;
+                        if r <= along { continue } else { (r * r - along * along).sqrt() }
+                    };
+                    check_barrier(&config(s, h), dhat, kappa, &format!("{what}, d/d̂ = {frac}, d̂ = {dhat}"));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_barrier_vanishes_with_two_derivatives_at_the_clamp() {
+        let (dhat, kappa) = (0.1, 1.0e3);
+        let inside = barrier_term(&pe(&config(0.4, dhat * (1.0 - 1e-7))), dhat, kappa, false).unwrap();
+        assert!(pe(&config(0.4, dhat * (1.0 + 1e-7))).d2 > dhat * dhat);
+        assert!(barrier_term(&pe(&config(0.4, dhat * (1.0 + 1e-7))), dhat, kappa, false).is_none());
+        // b ~ (x − x̂)³, b' ~ (x − x̂)², b'' ~ (x − x̂): with x − x̂ ≈ 2e-9 all are tiny
+        assert!(inside.energy.abs() < 1e-15);
+        assert!(inside.grad.iter().all(|g| g.abs() < 1e-9), "{:?}", inside.grad);
+        assert!(inside.hess.iter().flatten().all(|h| h.abs() < 1e-2), "{:?}", inside.hess);
+        // while deeper inside the Hessian is of order κ d̂²
+        let deep = barrier_term(&pe(&config(0.4, 0.5 * dhat)), dhat, kappa, false).unwrap();
+        assert!(deep.hess.iter().flatten().any(|h| h.abs() > 1.0));
+    }
+
+    #[test]
+    fn point_wall_distance_and_barrier() {
+        let (point, n) = ([0.2, -0.1], [0.6, 0.8]);
+        let (dhat, kappa) = (0.2, 5.0e3);
+        let f = |p: [f64; 2]| barrier_term(&point_wall_sq_distance(p, point, n).1, dhat, kappa, false);
+        for d in [0.01, 0.1, 0.19] {
+            let p = [point[0] + d * n[0] + 0.3 * n[1], point[1] + d * n[1] - 0.3 * n[0]];
+            let (dist, _) = point_wall_sq_distance(p, point, n);
+            assert!((dist - d).abs() < 1e-14);
+            let t = f(p).unwrap();
+            for i in 0..2 {
+                let (mut pp, mut pm) = (p, p);
+                pp[i] += H;
+                pm[i] -= H;
+                let g = (f(pp).unwrap().energy - f(pm).unwrap().energy) / (2.0 * H);
+                let scale = t.grad.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!((g - t.grad[i]).abs() <= TOL * scale, "wall gradient at d = {d}");
+                for k in 0..2 {
+                    let hk = (f(pp).unwrap().grad[k] - f(pm).unwrap().grad[k]) / (2.0 * H);
+                    let scale = t.hess.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+                    assert!((hk - t.hess[k][i]).abs() <= TOL * scale, "wall Hessian at d = {d}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_projected_hessian_is_positive_semidefinite_and_keeps_the_convex_part() {
+        let (dhat, kappa) = (0.3, 1.0);
+        let x = config(0.5, 0.1);
+        let exact = barrier_term(&pe(&x), dhat, kappa, false).unwrap().hess;
+        let proj = barrier_term(&pe(&x), dhat, kappa, true).unwrap().hess;
+        let m = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, k| exact[i][k]);
+        let p = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|i, k| proj[i][k]);
+        assert!(m.symmetric_eigen().eigenvalues.min() < -1e-6, "the exact point–edge barrier Hessian is indefinite here");
+        assert!(p.symmetric_eigen().eigenvalues.min() > -1e-9);
+        // the projection changes only the negative part: (P − H) is PSD
+        assert!((p - m).symmetric_eigen().eigenvalues.min() > -1e-9);
+    }
+}

@@ -18,6 +18,7 @@
 //! sees a process or a thread: the exchange of evaluations is the caller's
 //! ([`crate::parallel`]).
 
+pub mod barrier;
 pub mod boundary;
 pub mod enforce;
 pub mod geometry;

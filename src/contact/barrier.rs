@@ -1,0 +1,433 @@
+//! Barrier contact kernels (Incremental Potential Contact: Li et al., "Incremental Potential
+//! Contact: Intersection- and Inversion-free, Large-Deformation Dynamics", ACM TOG 39(4), 2020):
+//! the unsigned distance of a point to an edge and to a rigid wall with its first and second
+//! derivatives, the smoothly clamped log barrier on it, the projection of a pair's Hessian onto
+//! the positive semi-definite cone, and the continuous collision detection (CCD) of 2D
+//! point–edge and point–wall motion along a straight trajectory.
+//!
+//! Like the other enforcement kernels these read only coordinates: no mesh, no node number,
+//! no matrix. [`super::barrier_problem`] sums them over the pairs of a model.
+//!
+//! # Distances
+//!
+//! Everything works on the **squared** distance d² (smooth where the distance itself is not).
+//! A point p and an edge (a, b), with e = b − a and the projection parameter
+//! s = (p − a)·e / |e|², lie in one of three regions ([`PointEdgeRegion`]): s ≤ 0 (the closest
+//! point is a, d² = |p − a|²), s ≥ 1 (it is b), or the interior (d² = (e × (p − a))² / |e|²).
+//! d² is C¹ across the region boundaries (its gradient is continuous, its Hessian jumps), as in
+//! IPC. Dofs are ordered `[p_x, p_y, a_x, a_y, b_x, b_y]`.
+//!
+//! A node against a rigid wall (a half-plane with unit normal n into the domain through a
+//! point w): d = (p − w)·n, d² its square; the wall is not a dof.
+//!
+//! # The barrier
+//!
+//! b(x; x̂) = −(x − x̂)² ln(x / x̂) for 0 < x < x̂, 0 for x ≥ x̂, with x = d² and x̂ = d̂²: the
+//! function IPC uses (and `ipctk`'s `BarrierPotential(dhat, stiffness)` evaluates as
+//! κ b(d², d̂²)). It is C² at the clamp x = x̂ (b = b' = b'' = 0 there) and tends to +∞ as the
+//! distance tends to zero, so a minimiser never lets two boundaries touch. A pair contributes
+//! the energy κ b(d², d̂²) (per unit thickness: energy in N·mm/mm = N,
+//! b in mm⁴, so κ in N/mm⁴; see [`barrier_term`]).
+//!
+//! # Continuous collision detection
+//!
+//! Along a straight trajectory x(t) = x₀ + t Δx, t ∈ [0, 1], a point hits an edge when
+//! e(t) × (p(t) − a(t)) = 0 (a quadratic in t) with the projection parameter in [0, 1];
+//! [`point_edge_toi`] returns the smallest such t. A point hits a wall moving along its normal
+//! when the signed distance, linear in t, reaches zero ([`point_wall_toi`]). A line search that
+//! steps to [`CCD_RESCALING`] × the smallest time of impact keeps every iterate free of
+//! crossings with a margin (IPC's conservative rescaling, also `ipctk`'s default, 0.8).
+
+/// The fraction of the first time of impact a collision-free step may take (IPC's conservative
+/// rescaling; `ipctk::TightInclusionCCD.DEFAULT_CONSERVATIVE_RESCALING` is also 0.8): the step
+/// stops at 80 % of the way to the first contact, so the next distance is about a fifth of the
+/// last one at the least, never zero.
+pub const CCD_RESCALING: f64 = 0.8;
+
+/// Where the closest point of an edge to a point lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PointEdgeRegion {
+    /// At the first end a (s ≤ 0).
+    A,
+    /// At the second end b (s ≥ 1).
+    B,
+    /// Inside the edge (0 < s < 1).
+    Interior,
+}
+
+/// A squared distance and its derivatives over N dofs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SqDistance<const N: usize> {
+    /// d² (mm²).
+    pub d2: f64,
+    /// ∂d²/∂x (mm).
+    pub grad: [f64; N],
+    /// ∂²d²/∂x² (dimensionless), symmetric.
+    pub hess: [[f64; N]; N],
+}
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// The region of the closest point of edge (a, b) to p. A degenerate edge (a = b) is `A`.
+pub fn point_edge_region(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> PointEdgeRegion {
+    let e = sub(b, a);
+    let l = dot(e, e);
+    if !(l > 0.0) {
+        return PointEdgeRegion::A;
+    }
+    let s = dot(sub(p, a), e) / l;
+    if s <= 0.0 {
+        PointEdgeRegion::A
+    } else if s >= 1.0 {
+        PointEdgeRegion::B
+    } else {
+        PointEdgeRegion::Interior
+    }
+}
+
+/// Squared distance of p to edge (a, b), with its gradient and Hessian over
+/// `[p_x, p_y, a_x, a_y, b_x, b_y]` (see the module docs for the three regions).
+pub fn point_edge_sq_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> SqDistance<6> {
+    match point_edge_region(p, a, b) {
+        PointEdgeRegion::A => point_point(p, a, 1),
+        PointEdgeRegion::B => point_point(p, b, 2),
+        PointEdgeRegion::Interior => point_line(p, a, b),
+    }
+}
+
+/// d² = |p − q|² with q the node in slot `k` (1 = a, 2 = b) of the 6-dof layout.
+fn point_point(p: [f64; 2], q: [f64; 2], k: usize) -> SqDistance<6> {
+    let r = sub(p, q);
+    let mut out = SqDistance { d2: dot(r, r), grad: [0.0; 6], hess: [[0.0; 6]; 6] };
+    for c in 0..2 {
+        out.grad[c] = 2.0 * r[c];
+        out.grad[2 * k + c] = -2.0 * r[c];
+        out.hess[c][c] = 2.0;
+        out.hess[2 * k + c][2 * k + c] = 2.0;
+        out.hess[c][2 * k + c] = -2.0;
+        out.hess[2 * k + c][c] = -2.0;
+    }
+    out
+}
+
+/// d² = c² / L of p to the line through a and b, c = e × (p − a), L = |e|², e = b − a.
+fn point_line(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> SqDistance<6> {
+    let e = sub(b, a);
+    let r = sub(p, a);
+    let c = cross(e, r);
+    let l = dot(e, e);
+    // ∇c over (p, a, b): c = b×p − b×a − a×p
+    let gc = [-e[1], e[0], e[1] - r[1], r[0] - e[0], r[1], -r[0]];
+    // ∇L: 2e on b, −2e on a
+    let gl = [0.0, 0.0, -2.0 * e[0], -2.0 * e[1], 2.0 * e[0], 2.0 * e[1]];
+    // ∇²c: the cross product u×v has ∂²/∂u∂v = J = [[0, 1], [−1, 0]]
+    let j = [[0.0, 1.0], [-1.0, 0.0]];
+    let mut hc = [[0.0; 6]; 6];
+    let mut put = |u: usize, v: usize, sign: f64| {
+        // term sign·(u × v): block (u, v) = sign J, block (v, u) = sign Jᵀ
+        for i in 0..2 {
+            for k in 0..2 {
+                hc[2 * u + i][2 * v + k] += sign * j[i][k];
+                hc[2 * v + k][2 * u + i] += sign * j[i][k];
+            }
+        }
+    };
+    put(2, 0, 1.0); // b × p
+    put(2, 1, -1.0); // −b × a
+    put(1, 0, -1.0); // −a × p
+    // ∇²L: 2I on (a, a) and (b, b), −2I on (a, b) and (b, a)
+    let mut hl = [[0.0; 6]; 6];
+    for i in 0..2 {
+        hl[2 + i][2 + i] = 2.0;
+        hl[4 + i][4 + i] = 2.0;
+        hl[2 + i][4 + i] = -2.0;
+        hl[4 + i][2 + i] = -2.0;
+    }
+    let mut out = SqDistance { d2: c * c / l, grad: [0.0; 6], hess: [[0.0; 6]; 6] };
+    for i in 0..6 {
+        out.grad[i] = 2.0 * c / l * gc[i] - c * c / (l * l) * gl[i];
+        for k in 0..6 {
+            out.hess[i][k] = 2.0 / l * gc[i] * gc[k] + 2.0 * c / l * hc[i][k]
+                - 2.0 * c / (l * l) * (gc[i] * gl[k] + gl[i] * gc[k])
+                - c * c / (l * l) * hl[i][k]
+                + 2.0 * c * c / (l * l * l) * gl[i] * gl[k];
+        }
+    }
+    out
+}
+
+/// Signed distance d = (p − w)·n of p to a wall through `point` with unit `normal` (into the
+/// domain), and the squared distance d² with its derivatives over `[p_x, p_y]`.
+pub fn point_wall_sq_distance(p: [f64; 2], point: [f64; 2], normal: [f64; 2]) -> (f64, SqDistance<2>) {
+    let d = dot(sub(p, point), normal);
+    let n = normal;
+    let out = SqDistance {
+        d2: d * d,
+        grad: [2.0 * d * n[0], 2.0 * d * n[1]],
+        hess: [[2.0 * n[0] * n[0], 2.0 * n[0] * n[1]], [2.0 * n[1] * n[0], 2.0 * n[1] * n[1]]],
+    };
+    (d, out)
+}
+
+/// The clamped log barrier b(x; x̂) = −(x − x̂)² ln(x/x̂) on 0 < x < x̂ and its first two
+/// derivatives by x, `[b, b', b'']`; zero for x ≥ x̂, +∞ (with −∞, +∞ derivatives) for x ≤ 0.
+pub fn clamped_log(x: f64, xh: f64) -> [f64; 3] {
+    if x >= xh {
+        return [0.0; 3];
+    }
+    if !(x > 0.0) {
+        return [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY];
+    }
+    let g = x - xh;
+    let ln = (x / xh).ln();
+    [-g * g * ln, -2.0 * g * ln - g * g / x, -2.0 * ln - 4.0 * g / x + g * g / (x * x)]
+}
+
+/// A pair's barrier energy κ b(d², d̂²) (N per unit thickness), its gradient (N/mm) and Hessian
+/// (N/mm²) over the pair's dofs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BarrierTerm<const N: usize> {
+    pub energy: f64,
+    pub grad: [f64; N],
+    pub hess: [[f64; N]; N],
+}
+
+/// The barrier term of one pair at squared distance `d`, activation distance `dhat` (mm) and
+/// stiffness `kappa` (N/mm⁴); `None` when the pair is at or beyond d̂ (no contribution).
+/// With `project`, the Hessian is projected onto the positive semi-definite matrices
+/// ([`project_psd`]), which Newton on the incremental potential needs (the exact Hessian of
+/// the barrier on a point–edge distance is indefinite).
+pub fn barrier_term<const N: usize>(d: &SqDistance<N>, dhat: f64, kappa: f64, project: bool) -> Option<BarrierTerm<N>> {
+    let xh = dhat * dhat;
+    if d.d2 >= xh {
+        return None;
+    }
+    let [b, b1, b2] = clamped_log(d.d2, xh);
+    let mut t = BarrierTerm { energy: kappa * b, grad: [0.0; N], hess: [[0.0; N]; N] };
+    for i in 0..N {
+        t.grad[i] = kappa * b1 * d.grad[i];
+        for k in 0..N {
+            t.hess[i][k] = kappa * (b2 * d.grad[i] * d.grad[k] + b1 * d.hess[i][k]);
+        }
+    }
+    if project {
+        project_psd(&mut t.hess);
+    }
+    Some(t)
+}
+
+/// Replace a symmetric matrix by its projection onto the positive semi-definite cone (negative
+/// eigenvalues set to zero), in place. The eigen-decomposition is the cyclic Jacobi method on
+/// the stack (no allocation; N ≤ 6 here, converged to round-off in a few sweeps).
+pub fn project_psd<const N: usize>(h: &mut [[f64; N]; N]) {
+    let mut a = [[0.0; N]; N];
+    for i in 0..N {
+        for k in 0..N {
+            a[i][k] = 0.5 * (h[i][k] + h[k][i]);
+        }
+    }
+    let mut v = [[0.0; N]; N];
+    for (i, row) in v.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let norm: f64 = a.iter().flatten().map(|x| x * x).sum::<f64>().sqrt();
+    for _sweep in 0..50 {
+        let off: f64 = (0..N).flat_map(|i| (0..N).filter(move |&k| k != i).map(move |k| (i, k))).map(|(i, k)| a[i][k] * a[i][k]).sum::<f64>().sqrt();
+        if off <= 1e-15 * norm || off == 0.0 {
+            break;
+        }
+        for p in 0..N {
+            for q in p + 1..N {
+                if a[p][q] == 0.0 {
+                    continue;
+                }
+                // the rotation that zeroes a[p][q]
+                let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for k in 0..N {
+                    let (akp, akq) = (a[k][p], a[k][q]);
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for k in 0..N {
+                    let (apk, aqk) = (a[p][k], a[q][k]);
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for row in v.iter_mut() {
+                    let (vp, vq) = (row[p], row[q]);
+                    row[p] = c * vp - s * vq;
+                    row[q] = s * vp + c * vq;
+                }
+            }
+        }
+    }
+    if (0..N).all(|i| a[i][i] >= 0.0) {
+        return;
+    }
+    // H = V diag(max(λ, 0)) Vᵀ
+    for i in 0..N {
+        for k in 0..N {
+            h[i][k] = (0..N).map(|m| v[i][m] * a[m][m].max(0.0) * v[k][m]).sum();
+        }
+    }
+}
+
+/// Real roots of c₂ t² + c₁ t + c₀ = 0 in ascending order (a linear or constant equation when
+/// the leading coefficients vanish relative to the others). The constant zero equation gives
+/// no roots (see [`point_edge_toi`] for that case).
+fn quadratic_roots(c2: f64, c1: f64, c0: f64) -> ([f64; 2], usize) {
+    let scale = c2.abs().max(c1.abs()).max(c0.abs());
+    if scale == 0.0 {
+        return ([0.0; 2], 0);
+    }
+    if c2.abs() <= 1e-14 * scale {
+        if c1.abs() <= 1e-14 * scale {
+            return ([0.0; 2], 0);
+        }
+        return ([-c0 / c1, 0.0], 1);
+    }
+    let disc = c1 * c1 - 4.0 * c2 * c0;
+    if disc < 0.0 {
+        return ([0.0; 2], 0);
+    }
+    // the numerically stable pair of formulas
+    let q = -0.5 * (c1 + c1.signum() * disc.sqrt());
+    let (mut r0, mut r1) = if q != 0.0 { (q / c2, c0 / q) } else { (0.0, 0.0) };
+    if r0 > r1 {
+        std::mem::swap(&mut r0, &mut r1);
+    }
+    ([r0, r1], 2)
+}
+
+/// The first time of impact t ∈ [0, 1] of point p with edge (a, b), each moving on a straight
+/// line from its position at t = 0 (`x0`, `[p, a, b]`) to t = 1 (`x1`); `None` when they do
+/// not meet. Exact up to round-off: the roots of the collinearity quadratic
+/// e(t) × (p(t) − a(t)) = 0 whose projection parameter lies in [0, 1]. A point that stays on
+/// the edge's line for the whole motion is checked against the two ends (it can only enter the
+/// edge through one of them).
+pub fn point_edge_toi(x0: [[f64; 2]; 3], x1: [[f64; 2]; 3]) -> Option<f64> {
+    let [p0, a0, b0] = x0;
+    let [p1, a1, b1] = x1;
+    let r0 = sub(p0, a0);
+    let e0 = sub(b0, a0);
+    let dr = sub(sub(p1, p0), sub(a1, a0));
+    let de = sub(sub(b1, b0), sub(a1, a0));
+    let c0 = cross(e0, r0);
+    let c1 = cross(e0, dr) + cross(de, r0);
+    let c2 = cross(de, dr);
+    let on_edge = |t: f64| {
+        let r = [r0[0] + t * dr[0], r0[1] + t * dr[1]];
+        let e = [e0[0] + t * de[0], e0[1] + t * de[1]];
+        let l = dot(e, e);
+        if !(l > 0.0) {
+            return dot(r, r) == 0.0;
+        }
+        let s = dot(r, e) / l;
+        let slack = 1e-12;
+        (-slack..=1.0 + slack).contains(&s)
+    };
+    let size = dot(e0, e0).max(dot(r0, r0)).max(dot(dr, dr)).max(dot(de, de));
+    if c0.abs() <= 1e-14 * size && c1.abs() <= 1e-14 * size && c2.abs() <= 1e-14 * size {
+        // collinear all along: the point meets the edge when it reaches an end
+        let mut best: Option<f64> = None;
+        for (q0, q1) in [(a0, a1), (b0, b1)] {
+            let d0 = sub(p0, q0);
+            let dd = sub(sub(p1, p0), sub(q1, q0));
+            let l = dot(dd, dd);
+            if l > 0.0 {
+                let t = (-dot(d0, dd) / l).clamp(0.0, 1.0);
+                let m = [d0[0] + t * dd[0], d0[1] + t * dd[1]];
+                if dot(m, m) <= 1e-24 * size {
+                    best = Some(best.map_or(t, |b: f64| b.min(t)));
+                }
+            }
+        }
+        return if on_edge(0.0) { Some(0.0) } else { best };
+    }
+    let (roots, n) = quadratic_roots(c2, c1, c0);
+    roots[..n].iter().copied().filter(|t| (0.0..=1.0).contains(t)).find(|&t| on_edge(t))
+}
+
+/// The first time of impact t ∈ [0, 1] of a point moving from `p0` to `p1` with a wall whose
+/// signed distance to the point goes from `d0` (> 0) at t = 0 by the wall's own motion along
+/// its normal: the wall's point moves by `wall_shift` along the unit `normal`. `None` when the
+/// point stays in front of the wall.
+pub fn point_wall_toi(d0: f64, p0: [f64; 2], p1: [f64; 2], normal: [f64; 2], wall_shift: f64) -> Option<f64> {
+    let dd = dot(sub(p1, p0), normal) - wall_shift;
+    if d0 <= 0.0 {
+        return Some(0.0);
+    }
+    if dd >= 0.0 {
+        return None;
+    }
+    let t = -d0 / dd;
+    (t <= 1.0).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions_and_distances_agree_with_the_closest_point() {
+        let (a, b) = ([0.0, 0.0], [2.0, 0.0]);
+        assert_eq!(point_edge_region([-1.0, 1.0], a, b), PointEdgeRegion::A);
+        assert_eq!(point_edge_region([3.0, 1.0], a, b), PointEdgeRegion::B);
+        assert_eq!(point_edge_region([1.0, 1.0], a, b), PointEdgeRegion::Interior);
+        assert!((point_edge_sq_distance([-1.0, 1.0], a, b).d2 - 2.0).abs() < 1e-15);
+        assert!((point_edge_sq_distance([3.0, 1.0], a, b).d2 - 2.0).abs() < 1e-15);
+        assert!((point_edge_sq_distance([1.0, 0.5], a, b).d2 - 0.25).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_barrier_is_c2_at_the_clamp_and_infinite_at_contact() {
+        let xh = 0.01;
+        let [b, b1, b2] = clamped_log(xh * (1.0 - 1e-9), xh);
+        assert!(b.abs() < 1e-20 && b1.abs() < 1e-10 && b2.abs() < 1e-6, "{b} {b1} {b2}");
+        assert_eq!(clamped_log(0.0, xh)[0], f64::INFINITY);
+        assert_eq!(clamped_log(2.0 * xh, xh), [0.0; 3]);
+    }
+
+    #[test]
+    fn time_of_impact_of_simple_motions() {
+        // a point falling straight onto a fixed edge: crosses at t = 0.05 / 0.25
+        let t = point_edge_toi([[0.3, 0.05], [0.0, 0.0], [1.0, 0.0]], [[0.3, -0.2], [0.0, 0.0], [1.0, 0.0]]).unwrap();
+        assert!((t - 0.2).abs() < 1e-14);
+        // passing beside the edge: no impact
+        assert!(point_edge_toi([[1.3, 0.05], [0.0, 0.0], [1.0, 0.0]], [[1.3, -0.2], [0.0, 0.0], [1.0, 0.0]]).is_none());
+        // an edge rotating onto a fixed point: b = (cos θ, sin θ) linear from θ = 0.3 to −0.3
+        let t = point_edge_toi([[0.5, 0.0], [0.0, 0.0], [0.3f64.cos(), 0.3f64.sin()]], [[0.5, 0.0], [0.0, 0.0], [0.3f64.cos(), -0.3f64.sin()]]).unwrap();
+        assert!((t - 0.5).abs() < 1e-14, "{t}");
+        // a point moving along the edge's line into it
+        let t = point_edge_toi([[-1.0, 0.0], [0.0, 0.0], [1.0, 0.0]], [[1.0, 0.0], [0.0, 0.0], [1.0, 0.0]]).unwrap();
+        assert!((t - 0.5).abs() < 1e-14, "{t}");
+        // a wall advancing 0.3 onto a point 0.1 away that moves 0.1 towards it: impact at 0.25
+        let t = point_wall_toi(0.1, [0.0, 0.1], [0.0, 0.0], [0.0, 1.0], 0.3).unwrap();
+        assert!((t - 0.25).abs() < 1e-15);
+        assert!(point_wall_toi(0.1, [0.0, 0.1], [0.0, 0.2], [0.0, 1.0], 0.05).is_none());
+    }
+
+    #[test]
+    fn projection_onto_psd_clears_negative_eigenvalues_only() {
+        let mut h = [[2.0, 0.0], [0.0, -1.0]];
+        project_psd(&mut h);
+        assert!((h[0][0] - 2.0).abs() < 1e-15 && h[1][1].abs() < 1e-15);
+        let mut h = [[2.0, 1.0], [1.0, 2.0]];
+        project_psd(&mut h);
+        assert_eq!(h, [[2.0, 1.0], [1.0, 2.0]]);
+    }
+}
