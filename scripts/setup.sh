@@ -16,6 +16,8 @@ dpkg -s fonts-dejavu-core >/dev/null 2>&1 || need+=(fonts-dejavu-core)
 command -v pvpython >/dev/null 2>&1 || need+=(paraview python3-paraview)
 command -v xvfb-run >/dev/null 2>&1 || need+=(xvfb)
 command -v xauth >/dev/null 2>&1 || need+=(xauth)
+# Python with pip for the IPC toolkit's bindings below
+command -v python3 >/dev/null 2>&1 || need+=(python3 python3-pip)
 # Open MPI (mpirun, headers) and libclang (bindgen of the mpi-sys crate) for the `mpi` feature
 # and tests/mpi_ranks.rs
 command -v mpirun >/dev/null 2>&1 || need+=(openmpi-bin)
@@ -29,6 +31,13 @@ if ((${#need[@]})); then
   export DEBIAN_FRONTEND=noninteractive
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends "${need[@]}"
+fi
+
+# the IPC toolkit's Python bindings (ipctk 1.6.1 from PyPI): the reference values of the
+# barrier contact in tests/barrier_ipctk.rs, which calls the `python3` on PATH
+if [ "$(python3 -c 'import ipctk; print(ipctk.__version__)' 2>/dev/null)" != "1.6.1" ]; then
+  echo "setup: installing ipctk 1.6.1 for $(command -v python3)"
+  python3 -m pip install --quiet ipctk==1.6.1 || python3 -m pip install --quiet --break-system-packages ipctk==1.6.1
 fi
 
 if ! command -v cargo >/dev/null 2>&1; then

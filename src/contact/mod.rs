@@ -19,6 +19,7 @@
 //! ([`crate::parallel`]).
 
 pub mod barrier;
+pub mod barrier_problem;
 pub mod boundary;
 pub mod enforce;
 pub mod geometry;

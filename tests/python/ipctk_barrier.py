@@ -1,0 +1,46 @@
+"""Reference values of the barrier contact from the IPC toolkit's Python bindings (ipctk).
+
+Called by tests/barrier_ipctk.rs: python3 ipctk_barrier.py IN.json OUT.json
+IN: {"vertices": [[x, y]...], "edges": [[i, j]...], "body": [b...] (per vertex),
+     "vertices_t1": [[x, y]...], "dhat": d, "kappa": k}
+OUT: {"energy": E, "gradient": [...], "step": t, "pairs": n (edge-vertex pairs, the vertex-vertex
+      collisions counted by their weights), "version": "..."}
+Vertices of different bodies interact only (a vertex and an edge of one body never do).
+"""
+import json
+import sys
+
+import numpy as np
+import ipctk
+
+
+def main(src, dst):
+    with open(src) as f:
+        case = json.load(f)
+    V = np.asfortranarray(np.array(case["vertices"], dtype=float))
+    V1 = np.asfortranarray(np.array(case["vertices_t1"], dtype=float))
+    E = np.asfortranarray(np.array(case["edges"], dtype=np.int32))
+    body = case["body"]
+    mesh = ipctk.CollisionMesh(V, E)
+    mesh.can_collide = lambda i, j: body[i] != body[j]
+    collisions = ipctk.NormalCollisions()
+    collisions.build(mesh, V, case["dhat"])
+    barrier = ipctk.BarrierPotential(case["dhat"], case["kappa"])
+    energy = barrier(collisions, mesh, V)
+    gradient = barrier.gradient(collisions, mesh, V)
+    step = ipctk.compute_collision_free_stepsize(mesh, V, V1)
+    pairs = sum(collisions[i].weight for i in range(len(collisions)))
+    out = {
+        "energy": float(energy),
+        "gradient": [float(g) for g in gradient],
+        "step": float(step),
+        "pairs": float(pairs),
+        "version": ipctk.__version__,
+        "conservative_rescaling": ipctk.TightInclusionCCD.DEFAULT_CONSERVATIVE_RESCALING,
+    }
+    with open(dst, "w") as f:
+        json.dump(out, f)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])
