@@ -137,9 +137,19 @@ impl Model {
             .collect()
     }
 
-    /// The contact problem of this model (`None` when nothing can touch).
+    /// The contact problem of this model (`None` when nothing can touch, or with the barrier
+    /// contact, see [`Model::barrier_contact`]).
     pub fn contact_problem(&self) -> Option<ContactProblem> {
+        if self.contact.method == ContactMethod::Barrier {
+            return None;
+        }
         ContactProblem::new(&self.contact_bodies(), &self.x0, self.contact.clone())
+    }
+
+    /// The barrier contact of this model (`[contact] method = "barrier"`; `None` with another
+    /// method or when nothing can touch).
+    pub fn barrier_contact(&self) -> Option<crate::contact::barrier_problem::BarrierContact> {
+        (self.contact.method == ContactMethod::Barrier && self.has_contact()).then(|| crate::contact::barrier_problem::BarrierContact::of_bodies(&self.contact_bodies(), &self.x0, self.contact.dhat))
     }
 
     /// The rigid walls at time `t` as the planes the contact kernels take.

@@ -158,6 +158,16 @@ fn hertz_disc_on_a_rigid_flat_lagrange_multipliers() {
     check_hertz(text.replace("method = \"augmented_lagrangian\"", "method = \"lagrange\""));
 }
 
+/// The same disc with the barrier contact (`method = "barrier"`, IPC's clamped log barrier,
+/// default d̂ and κ): same tolerances; its gap is not a penetration (it reports none), and the
+/// smallest gap is positive and below d̂.
+#[test]
+fn hertz_disc_on_a_rigid_flat_barrier() {
+    let text = std::fs::read_to_string("jobs/verification/hertz_disc.toml").unwrap();
+    assert!(text.contains("method = \"augmented_lagrangian\"\npenetration_tol = 1e-4\n"));
+    check_hertz(text.replace("method = \"augmented_lagrangian\"\npenetration_tol = 1e-4\n", "method = \"barrier\"\n"));
+}
+
 /// The same disc with `[contact] normal = "smoothed"`: the disc touches a rigid wall only, whose
 /// node-to-wall kernel the smoothed node-to-segment normal leaves alone; same tolerances.
 #[test]
@@ -206,11 +216,23 @@ fn check_hertz(text: String) {
     // nodal contact forces of the converged state
     let t = sim.sol.time;
     let x = sim.coords(&sim.sol.u);
-    let mut f = vec![0.0; sim.model.n_dofs()];
     let walls = sim.model.wall_planes(t);
-    let contact = sim.contact.as_mut().unwrap();
-    let stats = contact.add(&x, &walls, &mut f, None, &mut Default::default());
-    let b = &contact.boundary;
+    let (f, wall_force, b) = match sim.contact.as_mut() {
+        Some(contact) => {
+            let mut f = vec![0.0; sim.model.n_dofs()];
+            let stats = contact.add(&x, &walls, &mut f, None, &mut Default::default());
+            (f, stats.wall_force[0], contact.boundary.clone())
+        }
+        None => {
+            // the barrier: the forces of its last evaluation (the converged state), the
+            // boundary of the model
+            let f = sim.barrier_forces().expect("a contact problem or the barrier");
+            let b = mpfem::contact::boundary::Boundary::new(&sim.model.contact_bodies(), &sim.model.x0, false);
+            let bottom: f64 = b.slaves.iter().filter(|&&(n, _)| x[n][1] < 0.0).map(|&(n, _)| -f[2 * n + 1]).sum();
+            (f, bottom, b)
+        }
+    };
+    let b = &b;
     let mut current_length = vec![0.0; x.len()];
     for s in &b.segments {
         let [a, b] = s.nodes;
@@ -261,9 +283,8 @@ fn check_hertz(text: String) {
         "Σ p ℓ = {sum_p_l} vs {f_bottom}"
     );
     assert!(
-        (stats.wall_force[0] / f_bottom - 1.0).abs() < 1e-9,
-        "{:?} vs {f_bottom}",
-        stats.wall_force
+        (wall_force / f_bottom - 1.0).abs() < 1e-9,
+        "{wall_force} vs {f_bottom}"
     );
     assert!(
         (top_total / f_top - 1.0).abs() < 1e-9,
@@ -309,6 +330,10 @@ fn check_hertz(text: String) {
         "  P' = {p_total:.2} N/mm (top wall {f_top:.2}), max penetration {:.2e} mm",
         last.max_penetration
     );
+    if let Some((gap, dhat)) = sim.barrier_gap() {
+        assert!(gap > 0.0 && gap < dhat, "the barrier's smallest gap {gap} mm, d̂ = {dhat} mm");
+        eprintln!("  barrier: smallest gap {gap:.3e} mm, d̂ {dhat:.3e} mm");
+    }
     eprintln!(
         "  closed form: a_H = {a_h:.4} mm, p0_H = {p0_h:.1} MPa ({} loaded nodes, a_H/h = {:.1})",
         reference.x.len(),

@@ -139,6 +139,7 @@ pub struct ContactRaw {
     pub search_distance: Option<f64>,
     pub lagrange_regularisation: Option<f64>,
     pub normal: Option<String>,
+    pub dhat: Option<f64>,
 }
 
 #[derive(Deserialize)]

@@ -302,6 +302,27 @@ impl Cx<'_> {
         }
         let (mut contact, stabilisation) = self.contact(r.contact)?;
         contact.walls = wall_kinds;
+        if contact.method == ContactMethod::Barrier {
+            use crate::contact::ContactKind;
+            if !matches!(contact.kind, ContactKind::Sliding) {
+                return Err(self.err(
+                    "contact.method",
+                    "value \"barrier\": the barrier contact is frictionless for now (friction and ties with the barrier are not built yet); expected contact.contact = \"sliding\" or another method",
+                ));
+            }
+            if let Some(i) = contact.walls.iter().position(|k| !matches!(k, ContactKind::Sliding)) {
+                return Err(self.err(
+                    &format!("walls[{i}].contact"),
+                    "the barrier contact (contact.method = \"barrier\") is frictionless for now; expected \"sliding\" or another contact.method",
+                ));
+            }
+        }
+        if contact.method == ContactMethod::Barrier && contact.normal != crate::contact::ContactNormal::Segment {
+            return Err(self.err("contact.normal", "given with contact.method = \"barrier\": the barrier acts on the distance to the straight boundary edges and has no master normal; expected no `normal` key with the barrier"));
+        }
+        if contact.dhat.is_some() && contact.method != ContactMethod::Barrier {
+            return Err(self.err("contact.dhat", "given without contact.method = \"barrier\": d̂ is the barrier's activation distance; expected it only with the barrier"));
+        }
         if contact.method == ContactMethod::Lagrange {
             use crate::contact::ContactKind;
             if !matches!(contact.kind, ContactKind::Sliding) {
@@ -1182,15 +1203,19 @@ impl Cx<'_> {
         let (mut spec, mut stab) = (ContactParams::default(), StabilisationParams::default());
         let Some(c) = c else { return Ok((spec, stab)) };
         if let Some(m) = c.method {
-            spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian", "lagrange"])? {
+            spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian", "lagrange", "barrier"])? {
                 "penalty" => ContactMethod::Penalty,
                 "lagrange" => ContactMethod::Lagrange,
+                "barrier" => ContactMethod::Barrier,
                 _ => ContactMethod::AugmentedLagrangian,
             };
         }
         spec.kind = self.contact_kind("contact.contact", c.contact, c.friction)?;
         if let Some(v) = c.penalty {
             spec.penalty = if v == 0.0 { None } else { Some(self.positive("contact.penalty", v, "a penalty in MPa/mm (0 = automatic)")?) };
+        }
+        if let Some(v) = c.dhat {
+            spec.dhat = Some(self.positive("contact.dhat", v, "the barrier's activation distance in mm (> 0; omit it for the default, 1/20 of the smallest element size)")?);
         }
         if let Some(v) = c.penetration_tol {
             spec.penetration_tol = self.positive("contact.penetration_tol", v, "a penetration tolerance relative to the element size")?;
@@ -1219,9 +1244,9 @@ impl Cx<'_> {
             }
             stab.viscous_retry = v;
         }
-        if let Some(v) = c.stiffen_on_cutback {
-            stab.stiffen_on_cutback = v;
-        }
+        // the barrier's springs are a fictitious inertia: their stiffness grows as 1/Δt² on a
+        // cut-back, as the inertia term of an implicit step does (see docs/case-file.md)
+        stab.stiffen_on_cutback = c.stiffen_on_cutback.unwrap_or(spec.method == ContactMethod::Barrier);
         if let Some(v) = c.regularisation {
             stab.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;
         }

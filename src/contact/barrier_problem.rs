@@ -91,12 +91,53 @@ pub struct BarrierContact {
     pub dhat: f64,
     /// Barrier stiffness κ (N/mm⁴).
     pub kappa: f64,
+    /// How far behind a wall's plane the wall's barrier has its zero (mm): the distance of a
+    /// node to a wall is measured from there, so that a particle that touches a wall at the
+    /// start is inside the barrier, not on its singularity (see [`BarrierContact::of_bodies`]).
+    pub wall_offset: f64,
+}
+
+/// The default activation distance d̂: 1/20 of the smallest element size `h_min` (mm) of the
+/// particles' boundaries. Gaps stay well below d̂ at the pressures of a compaction (see
+/// [`default_kappa`]), so they are a few thousandths of an element at most: far below what
+/// the solid ratio or the contact patches resolve.
+pub fn default_dhat(h_min: f64) -> f64 {
+    h_min / 20.0
+}
+
+/// The barrier stiffness κ (N/mm⁴) for the softest Young's modulus `e_min` (MPa), the element
+/// size `h` (mm, the tributary length of a boundary node) and d̂ (mm): κ = E h / (1000 d̂³).
+///
+/// Rationale: away from the clamp the barrier force of a pair at distance d is
+/// f ≈ 2 κ d̂⁴ / d (the ln term is small beside the 1/d one), a pressure f / h. With this κ the
+/// pressure is E/50 at d = d̂/10 — a strain of 2 %, the scale of the pressures of a compaction
+/// — so the gaps of a loaded contact lie between d̂/100 (p = E/5) and d̂; the normal
+/// stiffness there, 2 κ d̂⁴/d² = 0.2 E h/d̂ at d̂/10, is of the order of the default penalty of
+/// the other methods (10 E/h with d̂ = h/20), so the tangent is no worse conditioned.
+pub fn default_kappa(e_min: f64, h: f64, dhat: f64) -> f64 {
+    e_min * h / (1000.0 * dhat * dhat * dhat)
 }
 
 impl BarrierContact {
+    /// The barrier contact of the bodies of a model: every boundary segment and node (the
+    /// boundary of [`super::boundary::Boundary`]), d̂ from `dhat` or [`default_dhat`], κ from
+    /// [`default_kappa`] with the softest body and the finest boundary, and the walls' barriers
+    /// d̂/2 behind their planes: a particle may touch a wall at the start (the die is often
+    /// drawn round the packing), and a loaded node then rests within d̂/2 of the wall's plane
+    /// (its gap to the barrier's zero lies between d̂/100 and d̂, [`default_kappa`]).
+    pub fn of_bodies(bodies: &[super::ContactBody], x0: &[[f64; 2]], dhat: Option<f64>) -> Self {
+        let b = super::boundary::Boundary::new(bodies, x0, false);
+        let h_min = b.h_min();
+        let e_min = b.body_e.iter().copied().fold(f64::INFINITY, f64::min);
+        let dhat = dhat.unwrap_or_else(|| default_dhat(h_min));
+        let mut c = Self::new(b.segments, b.slaves, dhat, default_kappa(e_min, h_min, dhat));
+        c.wall_offset = 0.5 * dhat;
+        c
+    }
+
     pub fn new(segments: Vec<Segment>, nodes: Vec<(usize, usize)>, dhat: f64, kappa: f64) -> Self {
         let search = ContactSearch::new(segments.clone());
-        Self { segments, nodes, search, dhat, kappa }
+        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0 }
     }
 
     /// The barrier terms at coordinates `x` (every node) with the walls `walls` where they are;
@@ -134,8 +175,9 @@ impl BarrierContact {
         }
         for (w, wall) in walls.iter().enumerate() {
             let n = unit(wall.normal);
+            let point = [wall.point[0] - self.wall_offset * n[0], wall.point[1] - self.wall_offset * n[1]];
             for &(node, _) in &self.nodes {
-                let (d, sq) = point_wall_sq_distance(x[node], wall.point, n);
+                let (d, sq) = point_wall_sq_distance(x[node], point, n);
                 if d >= self.dhat {
                     continue;
                 }
@@ -151,6 +193,62 @@ impl BarrierContact {
             }
         }
         Ok(())
+    }
+
+    /// How many boundary nodes lie inside another particle (strictly, by the crossing number
+    /// of a ray against that particle's boundary) or on or behind a wall's plane, at `x` with
+    /// the walls `walls`: zero for every admissible configuration. An O(N·M) check with a box
+    /// filter per particle, for tests and diagnostics.
+    pub fn crossings(&self, x: &[[f64; 2]], walls: &[Wall]) -> usize {
+        let n_bodies = self.segments.iter().map(|s| s.body + 1).max().unwrap_or(0);
+        let mut boxes = vec![[f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY]; n_bodies];
+        let mut by_body: Vec<Vec<[usize; 2]>> = vec![Vec::new(); n_bodies];
+        for s in &self.segments {
+            by_body[s.body].push(s.nodes);
+            for &n in &s.nodes {
+                let b = &mut boxes[s.body];
+                b[0] = b[0].min(x[n][0]);
+                b[1] = b[1].min(x[n][1]);
+                b[2] = b[2].max(x[n][0]);
+                b[3] = b[3].max(x[n][1]);
+            }
+        }
+        let mut count = 0;
+        for &(node, body) in &self.nodes {
+            let p = x[node];
+            let inside = (0..n_bodies).filter(|&b| b != body).any(|b| {
+                let bb = boxes[b];
+                if p[0] <= bb[0] || p[0] >= bb[2] || p[1] <= bb[1] || p[1] >= bb[3] {
+                    return false;
+                }
+                // a ray in +x: an odd number of crossed edges is inside
+                let mut odd = false;
+                for &[i, j] in &by_body[b] {
+                    let (a, c) = (x[i], x[j]);
+                    if (a[1] > p[1]) != (c[1] > p[1]) {
+                        let xc = a[0] + (p[1] - a[1]) / (c[1] - a[1]) * (c[0] - a[0]);
+                        if xc > p[0] {
+                            odd = !odd;
+                        }
+                    }
+                }
+                odd
+            });
+            let behind = walls.iter().any(|w| {
+                let n = unit(w.normal);
+                (p[0] - w.point[0]) * n[0] + (p[1] - w.point[1]) * n[1] <= -self.wall_offset
+            });
+            if inside || behind {
+                count += 1;
+            }
+        }
+        count
+    }
+
+    /// Every node–edge pair (of different particles) closer than `reach` at `x`, sorted.
+    pub fn candidates(&mut self, x: &[[f64; 2]], reach: f64) -> Vec<(usize, usize)> {
+        self.search.update(x);
+        self.search.pairs(x, &self.nodes, reach)
     }
 
     /// The largest step η ∈ [0, 1] of the straight motion from `x0` to `x1` (every node; the
@@ -178,8 +276,9 @@ impl BarrierContact {
         for (w0, w1) in walls0.iter().zip(walls1) {
             let n = unit(w0.normal);
             let shift = (w1.point[0] - w0.point[0]) * n[0] + (w1.point[1] - w0.point[1]) * n[1];
+            let point = [w0.point[0] - self.wall_offset * n[0], w0.point[1] - self.wall_offset * n[1]];
             for &(node, _) in &self.nodes {
-                let (d0, _) = point_wall_sq_distance(x0[node], w0.point, n);
+                let (d0, _) = point_wall_sq_distance(x0[node], point, n);
                 if let Some(t) = point_wall_toi(d0, x0[node], x1[node], n, shift) {
                     toi = toi.min(t);
                 }
@@ -190,6 +289,41 @@ impl BarrierContact {
         } else {
             1.0
         }
+    }
+}
+
+impl BarrierEval {
+    /// Whether the pairs of this evaluation hold each body in x and in y (a pair's normal holds
+    /// both of its bodies in a direction where its component exceeds
+    /// [`super::problem::SUPPORT_COSINE`]; a wall holds its node's body), `[body][direction]`.
+    pub fn body_support(&self, contact: &BarrierContact, walls: &[Wall], n_bodies: usize) -> Vec<[bool; 2]> {
+        let mut held = vec![[false; 2]; n_bodies];
+        let body_of = |node: usize| contact.nodes.binary_search_by_key(&node, |&(n, _)| n).ok().map(|i| contact.nodes[i].1);
+        let mut hold = |body: usize, n: [f64; 2]| {
+            for c in 0..2 {
+                if n[c].abs() > super::problem::SUPPORT_COSINE {
+                    held[body][c] = true;
+                }
+            }
+        };
+        for e in &self.edges {
+            // the normal: from the closest point to the node
+            let g = [e.term.grad[0], e.term.grad[1]];
+            let l = g[0].hypot(g[1]);
+            if l > 0.0 {
+                let n = [g[0] / l, g[1] / l];
+                if let Some(b) = body_of(e.node) {
+                    hold(b, n);
+                }
+                hold(contact.segments[e.segment].body, n);
+            }
+        }
+        for w in &self.walls {
+            if let Some(b) = body_of(w.node) {
+                hold(b, unit(walls[w.wall].normal));
+            }
+        }
+        held
     }
 }
 

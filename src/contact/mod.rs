@@ -51,6 +51,11 @@ pub enum ContactMethod {
     /// Lagrange multipliers (paper eq. 22–25): one unknown contact force per candidate pair,
     /// zero penetration, an indefinite system solved by LU. Frictionless contact only.
     Lagrange,
+    /// Incremental Potential Contact: a smoothly clamped log barrier on the distance of every
+    /// boundary node to every boundary edge of another particle and to every wall closer than
+    /// d̂ ([`barrier`], [`barrier_problem`]), with a line search that never lets an iterate
+    /// cross. Frictionless for now.
+    Barrier,
 }
 
 /// Normal of the node-to-segment pairs between particles (`[contact] normal`).
@@ -93,6 +98,9 @@ pub struct ContactParams {
     pub lagrange_regularisation: f64,
     /// Contact normal of the node-to-segment pairs: straight segments or a smoothed surface.
     pub normal: ContactNormal,
+    /// Barrier: the activation distance d̂ (mm); `None` = 1/20 of the smallest element size
+    /// ([`barrier_problem::default_dhat`]).
+    pub dhat: Option<f64>,
 }
 
 impl Default for ContactParams {
@@ -107,6 +115,7 @@ impl Default for ContactParams {
             search_distance: None,
             lagrange_regularisation: 1e-4,
             normal: ContactNormal::default(),
+            dhat: None,
         }
     }
 }

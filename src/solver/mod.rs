@@ -27,6 +27,7 @@
 //! line search, the multiplier loops, the predictor, the release of an imbalance), `stepping`
 //! (the time loop, cut-back, commit), `remeshing` (re-meshing a running simulation).
 
+mod barrier;
 mod newton;
 mod params;
 mod remeshing;
@@ -63,6 +64,9 @@ pub enum NewtonFailure {
     Element(#[from] AssemblyError),
     #[error("linear solver: {0}")]
     Linear(String),
+    /// An iterate the contact cannot take (the barrier: boundaries touching).
+    #[error("contact: {0}")]
+    Contact(String),
 }
 
 /// A run that could not go on.
@@ -111,6 +115,8 @@ pub struct Simulation {
     pub contact: Option<ContactProblem>,
     contact_stats: ContactStats,
     contact_evals: ContactEvals,
+    /// The barrier contact (`[contact] method = "barrier"`; then `contact` is None).
+    barrier: Option<barrier::BarrierRun>,
     /// The stabilisation springs of a contact problem.
     springs: Springs,
     /// Newmark / HHT-α state of an implicit dynamic analysis (None: quasi-static).
@@ -150,6 +156,17 @@ impl Simulation {
             (pair_dofs, multiplier_dofs, node_dofs) = (c.pair_dof_lists(), c.multiplier_dofs(), c.node_dof_lists());
             assembler.set_terms(&mut kk, &pair_dofs, &multiplier_dofs);
         }
+        let h = model.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min);
+        let mut barrier = model.barrier_contact().map(|c| barrier::BarrierRun::new(c, h));
+        if let Some(b) = barrier.as_mut() {
+            // the pattern of the pairs within d̂ + h of the reference configuration
+            b.pattern = b.contact.candidates(&model.x0, b.contact.dhat + h);
+            pair_dofs = b.pattern.iter().map(|&p| b.pair_dofs(p)).collect();
+            node_dofs = b.node_dofs.clone();
+            assembler.set_terms(&mut kk, &pair_dofs, &[]);
+            b.walls1 = model.wall_planes(0.0);
+            b.walls0 = b.walls1.clone();
+        }
         if let Some(p) = &par {
             assembler.retain_elements(&p.owned_elements);
         }
@@ -158,7 +175,7 @@ impl Simulation {
         let body_e: Vec<f64> = model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).collect();
         let body_h: Vec<f64> = model.bodies.iter().map(|b| b.contact_h).collect();
         let body_nodes: Vec<_> = model.bodies.iter().map(|b| b.node_offset..b.node_offset + b.mesh.nodes.len()).collect();
-        let springs = Springs::new(&model.x0, &model.elements, &model.elem_body, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some());
+        let springs = Springs::new(&model.x0, &model.elements, &model.elem_body, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some() || barrier.is_some());
         let n_walls = model.loading.walls.len();
         let symmetric = model.symmetric_tangent();
         let kind = spec.linear.resolve(symmetric);
@@ -260,6 +277,7 @@ impl Simulation {
             contact,
             contact_stats: ContactStats::default(),
             contact_evals: ContactEvals::default(),
+            barrier,
             springs,
             dynamics,
             clock: Clock::default(),
@@ -412,6 +430,30 @@ impl Simulation {
         let [x0, x1, y0, y1] = self.model.loading.die(0.0)?;
         let die = (x1 - x0) * (y1 - y0);
         (die > 0.0).then(|| self.run.area0_total / die)
+    }
+
+    /// The barrier contact's force on every dof at its last evaluation — the converged state
+    /// after a step — as a contribution to the internal force (N/mm; the force on a node is
+    /// its negative); None without the barrier.
+    pub fn barrier_forces(&self) -> Option<Vec<f64>> {
+        let b = self.barrier.as_ref()?;
+        let mut f = vec![0.0; self.model.n_dofs()];
+        b.eval.add_gradient(&mut f);
+        Some(f)
+    }
+
+    /// The barrier's smallest distance and activation distance d̂ at its last evaluation (mm);
+    /// None without the barrier.
+    pub fn barrier_gap(&self) -> Option<(f64, f64)> {
+        self.barrier.as_ref().map(|b| (b.eval.min_distance, b.contact.dhat))
+    }
+
+    /// With the barrier: how many boundary nodes of the committed state lie inside another
+    /// particle or behind a wall (zero by construction; see
+    /// [`crate::contact::barrier_problem::BarrierContact::crossings`]). None without it.
+    pub fn barrier_crossings(&self) -> Option<usize> {
+        let b = self.barrier.as_ref()?;
+        Some(b.contact.crossings(&self.coords(&self.sol.u), &self.model.wall_planes(self.sol.time)))
     }
 
     /// Contact state per node of the last committed step (None without contact).

@@ -120,6 +120,8 @@ impl Simulation {
         let mut e0 = 0.0;
         let mut e_last = f64::INFINITY;
         let mut du_full = vec![0.0; u.len()];
+        // the largest nodal change of the last whole Newton update (mm; before the line search)
+        let mut last_update = f64::INFINITY;
         for k in 0..=self.spec.max_iterations {
             let reference = self.reference_force();
             let rel = rnorm / reference;
@@ -144,7 +146,10 @@ impl Simulation {
                     }
                 }
             }
-            if !rnorm.is_finite() || (k > 2 && rel > 1e8 * residuals[0].max(1e-300)) {
+            // (with the barrier the walls reach the particles during the solve: a residual of
+            // zero at its start is no scale for divergence)
+            let first = if self.barrier.is_some() { residuals.iter().copied().fold(0.0, f64::max) } else { residuals[0] };
+            if !rnorm.is_finite() || (k > 2 && rel > 1e8 * first.max(1e-300)) {
                 return Err(NewtonFailure::Diverged { iteration: k, residuals });
             }
             let residual_ok = rnorm <= self.spec.residual_tol * reference || rnorm <= self.run.force_floor;
@@ -156,16 +161,32 @@ impl Simulation {
             // round-off floor of the assembly has been reached)
             let tiny = rel <= 0.01 * self.spec.residual_tol || rnorm <= self.run.force_floor;
             let floor_reached = k >= 1 && rel >= 0.5 * residuals[k - 1];
-            if residual_ok && (k == 0 || energy_ok || tiny || floor_reached) {
+            if residual_ok && (k == 0 || energy_ok || tiny || floor_reached) && self.walls_arrived() {
                 return Ok((k, rel));
+            }
+            // with the barrier, IPC's test on the Newton step as well: a residual within a
+            // hundred times its tolerance and a whole Newton update below 1e-6 h. The barrier's
+            // point–edge distance is C¹ only (its Hessian jumps where the closest point passes
+            // an edge's end), and on a regular grid nodes face nodes exactly there: Newton
+            // then circles the solution at a residual of 1e-8–1e-7 with updates of 1e-7 mm
+            // (seen on the asphalt octagons of 5.2.1, h ≈ 10 mm)
+            if let Some(b) = self.barrier.as_ref() {
+                if k >= 2 && b.alpha >= 1.0 && rel <= 100.0 * self.spec.residual_tol && last_update <= 1e-6 * b.h_min {
+                    return Ok((k, rel));
+                }
             }
             if k == self.spec.max_iterations {
                 break;
             }
-            // solve K Δu = R
+            // solve K Δu = R (with the barrier, R includes the walls' remaining motion)
             self.sys.du.iter_mut().for_each(|v| *v = 0.0);
+            let r_true = self.barrier.is_some().then(|| self.sys.r.clone());
+            self.add_wall_motion();
             self.solve_linear()?;
             let energy = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum::<f64>().abs();
+            // with the barrier: the slope of the incremental potential along the update is
+            // −R(u)·Δu (R = −∇Π), positive g0 = R·Δu for a descent direction
+            let g0 = r_true.as_ref().map_or(0.0, |r| self.sys.du.iter().zip(r).map(|(a, b)| a * b).sum::<f64>());
             if k == 0 {
                 e0 = energy.max(f64::MIN_POSITIVE);
             }
@@ -179,31 +200,61 @@ impl Simulation {
             if let Some(c) = self.contact.as_mut() {
                 c.lm.mark();
             }
-            let mut eta = 1.0;
+            // with the barrier the step starts at the largest collision-free fraction of the
+            // update (the walls moving with it) and may back off further
+            let (eta_max, alpha0, tries) = match self.barrier.as_ref() {
+                Some(b) => {
+                    let alpha0 = b.alpha;
+                    (self.barrier_step_limit(&u0, &du_full), alpha0, 12)
+                }
+                None => (1.0, 1.0, 6),
+            };
+            let mut eta = eta_max;
             let r_old = rnorm;
             let mut accepted = false;
-            for _ in 0..6 {
+            for _ in 0..tries {
                 for d in 0..u.len() {
                     u[d] = u0[d] + eta * du_full[d];
                 }
                 if let Some(c) = self.contact.as_mut() {
                     c.lm.step(&self.sys.du[n_free..], eta);
                 }
+                if let Some(b) = self.barrier.as_mut() {
+                    let a = alpha0 + eta * (1.0 - alpha0);
+                    b.alpha = if a >= 1.0 - 1e-12 { 1.0 } else { a };
+                }
                 match self.evaluate(u, inc, vol, full) {
                     Ok(rn) => {
                         // accept when the residual norm or the energy |Δu·R(η)| decreased
                         let s: f64 = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum::<f64>().abs();
-                        let better = rn.is_finite() && (rn < r_old || s < 0.9 * energy);
-                        if !line_search || better || eta < 0.06 {
+                        // (with the barrier a residual that does not grow is enough: the walls
+                        // move with the step, and a free motion has a zero residual)
+                        let better = rn.is_finite()
+                            && if tries > 6 {
+                                // the barrier: while the walls move, any admissible iterate; then
+                                // Armijo on the potential, its change along the line by the
+                                // trapezoidal rule on the slopes at both ends (or a residual
+                                // that does not grow)
+                                let slope: f64 = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum();
+                                let change = -0.5 * eta * (g0 + slope);
+                                alpha0 < 1.0 || rn <= r_old || (g0 > 0.0 && change <= -1e-4 * eta * g0)
+                            } else {
+                                rn < r_old || s < 0.9 * energy
+                            };
+                        if !line_search || better || eta < 0.06 * eta_max * if tries > 6 { 1e-2 } else { 1.0 } {
                             rnorm = rn;
                             accepted = rn.is_finite();
                             break;
                         }
                         eta *= 0.5;
                     }
-                    Err(e) if eta < 0.06 => return Err(e.into()),
+                    Err(e) if eta < 0.06 * eta_max * if tries > 6 { 1e-3 } else { 1.0 } => return Err(e),
                     Err(_) => eta *= 0.5,
                 }
+            }
+            last_update = du_full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if let Some(b) = self.barrier.as_ref() {
+                tracing::debug!(eta, eta_max, alpha = b.alpha, accepted, min_distance = b.eval.min_distance, last_update, "barrier line search");
             }
             if !accepted {
                 // keep the smallest step tried; its residual drives the next iteration

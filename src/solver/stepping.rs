@@ -177,6 +177,9 @@ impl Simulation {
     /// are anchored and how stiff they are. `dt = 0` is a re-equilibration in place: the springs
     /// are then anchored at the last converged position.
     pub(super) fn prepare_contact(&mut self, dt: f64) -> Result<(), NewtonFailure> {
+        if self.barrier.is_some() {
+            return self.prepare_barrier(dt);
+        }
         let _t = self.clock.scope(Phase::ContactSearch);
         let Some(c) = self.contact.as_mut() else { return Ok(()) };
         let x_n = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + self.sol.u[2 * n], p[1] + self.sol.u[2 * n + 1]]).collect::<Vec<_>>();
@@ -211,9 +214,11 @@ impl Simulation {
         let t = self.sol.time + dt;
         let inc = TimeIncrement { time: t, dt };
         self.prepare_contact(dt)?;
-        // prediction
+        // prediction (none with the barrier: its Newton starts from the converged, collision-
+        // free configuration, and the line search moves the walls)
         let mut u = self.sol.u.clone();
-        if self.run.dt_prev > 0.0 {
+        let barrier = self.barrier.is_some();
+        if self.run.dt_prev > 0.0 && !barrier {
             let s = dt / self.run.dt_prev;
             for (d, &q) in self.sys.assembler.eq.iter().enumerate() {
                 if q != FIXED {
@@ -225,7 +230,7 @@ impl Simulation {
         if let Some(dy) = self.dynamics.as_ref() {
             dy.predict(&mut u, dt, &self.sys.assembler.eq); // Newmark predictor (a_{n+1} = 0)
         }
-        if self.run.dt_prev == 0.0 && self.dynamics.is_none() {
+        if self.run.dt_prev == 0.0 && self.dynamics.is_none() && !barrier {
             // no increment to extrapolate (first step): linearised prediction instead
             if let Err(e) = self.tangent_predictor(&mut u, inc) {
                 tracing::debug!(%e, "tangent predictor skipped");
@@ -245,6 +250,7 @@ impl Simulation {
         if let Some(c) = self.contact.as_mut() {
             c.commit();
         }
+        self.commit_barrier();
         self.u_prev.copy_from_slice(&self.sol.u);
         self.sol.u = trial.u;
         self.sol.lambda = trial.lambda;
@@ -294,7 +300,13 @@ impl Simulation {
                 [m[0] / k, m[1] / k]
             })
             .collect();
-        let compaction = self.contact.as_ref().map(|c| {
+        // the boundary nodes of a contact problem (penalty-type or barrier)
+        let boundary: Option<Vec<usize>> = match (&self.contact, &self.barrier) {
+            (Some(c), _) => Some(c.boundary.slaves.iter().map(|&(n, _)| n).collect()),
+            (None, Some(b)) => Some(b.contact.nodes.iter().map(|&(n, _)| n).collect()),
+            (None, None) => None,
+        };
+        let compaction = boundary.map(|nodes| {
             let t = self.sol.time;
             let mut out = Compaction {
                 max_penetration: self.contact_stats.max_penetration,
@@ -308,7 +320,7 @@ impl Simulation {
                 self.run.work_ext += 0.5 * (f + self.run.last_wall_force[w]) * moved;
                 self.run.last_wall_force[w] = f;
                 let k = wall.side.index();
-                let len = loading.wall_length(w, t, c.boundary.slaves.iter().map(|&(n, _)| x[n]));
+                let len = loading.wall_length(w, t, nodes.iter().map(|&n| x[n]));
                 out.force[k] += f;
                 out.pressure[k] += if len > 0.0 { f / len } else { 0.0 };
             }

@@ -19,7 +19,7 @@
 //! bit-identical to the serial one.
 
 use super::{NewtonFailure, Phase, Simulation};
-use crate::assembly::{AssemblyError, Assembler, ElementFields, FIXED};
+use crate::assembly::{Assembler, ElementFields, FIXED};
 use crate::comm::Collective;
 use crate::contact::ContactTangent;
 use crate::element::Volumetric;
@@ -166,11 +166,14 @@ impl Simulation {
 
     /// Assemble at displacement `u` (see the module docs for the order of the terms): fills
     /// `f_int`, `f_ext`, the free residual `r` and (if asked) the tangent. Returns ‖r‖.
-    pub(super) fn evaluate(&mut self, u: &[f64], inc: TimeIncrement, vol: &[Volumetric], tangent: bool) -> Result<f64, AssemblyError> {
+    pub(super) fn evaluate(&mut self, u: &[f64], inc: TimeIncrement, vol: &[Volumetric], tangent: bool) -> Result<f64, NewtonFailure> {
         let x = self.coords(u);
         // on several processes the element tangent is summed onto rank 0 right after the
         // element assembly; the rest (loads, contact, springs, inertia) rank 0 alone adds
         let root_tangent = tangent && self.sys.comm.is_root();
+        // the barrier first: an iterate it cannot take fails before any work, and a pair
+        // without a block grows the pattern before the elements fill it
+        self.evaluate_barrier(&x, tangent)?;
         {
             let _t = self.clock.scope(Phase::ElementAssembly);
             let sys = &mut self.sys;
@@ -212,6 +215,11 @@ impl Simulation {
             };
             // the stabilisation springs (in residual and tangent, dissipate energy) and the
             // tangent-only regularisation
+            self.springs.add(u, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
+        }
+        if self.barrier.is_some() {
+            self.add_barrier(root_tangent);
+            let sys = &mut self.sys;
             self.springs.add(u, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
         }
         // implicit dynamics: inertia (HHT-weighted) in F_int, M/((1+α)βΔt²) on the diagonal

@@ -1,0 +1,230 @@
+//! The barrier contact in a running simulation (`[contact] method = "barrier"`): its terms in
+//! the one pattern, the walls' prescribed motion reached through the collision-checked line
+//! search, and the adaptation of the barrier stiffness.
+//!
+//! # The walls
+//!
+//! A wall jumping to its position at the end of the step would put the nodes it touches behind
+//! it. Instead the walls move with the Newton iterates: at the start of a step they are where
+//! the last step left them (α = 0), every Newton direction is the linearised response to
+//! moving them the rest of the way (the barrier's wall terms give the right-hand side
+//! H n Δw, H a wall pair's Hessian, n the wall's normal, Δw the wall's remaining advance), and
+//! the line search moves the nodes and the walls together by the same fraction η of that
+//! direction (α ← α + η (1 − α)), limited by the continuous collision detection of both. A
+//! step has converged only when the walls have arrived (α = 1) and the residual is within its
+//! tolerance. No iterate has a node on or behind a wall.
+//!
+//! # The pattern
+//!
+//! The pairs of the barrier change with every iterate. The pattern holds a block for every
+//! node–edge pair closer than d̂ + h (h the smallest element size) at the start of the step,
+//! and grows (incrementally, [`crate::assembly::Assembler::set_terms`]) when an iterate brings
+//! a pair within d̂ that it does not hold; wall pairs use the nodes' own diagonal blocks.
+
+use super::{NewtonFailure, Phase, Simulation};
+use crate::assembly::FIXED;
+use crate::contact::barrier_problem::{BarrierContact, BarrierEval};
+use crate::contact::{ContactStats, Wall};
+
+/// Whether the pair Hessians are projected onto the PSD matrices.
+const PROJECT: bool = false;
+
+/// The barrier contact of a simulation and its state within a step.
+#[derive(Debug)]
+pub(super) struct BarrierRun {
+    pub contact: BarrierContact,
+    /// The terms of the last evaluation.
+    pub eval: BarrierEval,
+    /// The node–edge pairs with a block in the pattern, sorted (`maps.pairs` in this order).
+    pub pattern: Vec<(usize, usize)>,
+    /// The dofs of every boundary node (`maps.nodes` in this order).
+    pub node_dofs: Vec<Vec<usize>>,
+    /// The walls at the start and at the end of the step.
+    pub walls0: Vec<Wall>,
+    pub walls1: Vec<Wall>,
+    /// How far through the step the walls are (0 at its start, 1 arrived).
+    pub alpha: f64,
+    /// Smallest distance of the last converged step (mm).
+    pub min_distance: f64,
+    /// κ as built (the adaptation never goes below it or above 10⁴ times it).
+    pub kappa0: f64,
+    /// The smallest element size of the particles (mm).
+    pub h_min: f64,
+}
+
+impl BarrierRun {
+    pub fn new(contact: BarrierContact, h_min: f64) -> Self {
+        let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
+        let kappa0 = contact.kappa;
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min }
+    }
+
+    /// The walls at progress `alpha` through the step (straight between their positions at
+    /// the start and the end).
+    pub fn walls_at(&self, alpha: f64) -> Vec<Wall> {
+        if alpha >= 1.0 || self.walls0.len() != self.walls1.len() {
+            return self.walls1.clone();
+        }
+        self.walls0
+            .iter()
+            .zip(&self.walls1)
+            .map(|(a, b)| Wall { point: [a.point[0] + alpha * (b.point[0] - a.point[0]), a.point[1] + alpha * (b.point[1] - a.point[1])], normal: b.normal })
+            .collect()
+    }
+
+    /// The dofs of the block of pair (node, segment).
+    pub fn pair_dofs(&self, (node, s): (usize, usize)) -> Vec<usize> {
+        let [a, b] = self.contact.segments[s].nodes;
+        vec![2 * node, 2 * node + 1, 2 * a, 2 * a + 1, 2 * b, 2 * b + 1]
+    }
+}
+
+impl Simulation {
+    /// The pattern's barrier blocks become `pairs` (sorted); the positions of every block
+    /// follow when the pattern changes.
+    pub(super) fn set_barrier_pattern(&mut self, pairs: Vec<(usize, usize)>) -> Result<(), NewtonFailure> {
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
+        if pairs == b.pattern && b.pattern.len() == self.sys.maps.pairs.len() {
+            return Ok(());
+        }
+        b.pattern = pairs;
+        let dofs: Vec<Vec<usize>> = b.pattern.iter().map(|&p| b.pair_dofs(p)).collect();
+        let sys = &mut self.sys;
+        let changed = sys.assembler.set_terms(&mut sys.kk, &dofs, &[]);
+        sys.maps.pairs = sys.assembler.block_map(&sys.kk, &dofs);
+        if changed {
+            sys.r.resize(sys.kk.nrows, 0.0);
+            sys.du.resize(sys.kk.nrows, 0.0);
+            sys.locate_fixed_terms(&self.model, &b.node_dofs);
+            sys.analyze()?;
+        }
+        Ok(())
+    }
+
+    /// The start of a step of size `dt` with the barrier: the walls from where they are to
+    /// where they go, the pattern from the pairs within d̂ + h of the converged configuration.
+    pub(super) fn prepare_barrier(&mut self, dt: f64) -> Result<(), NewtonFailure> {
+        let _t = self.clock.scope(Phase::ContactSearch);
+        let t = self.sol.time;
+        let x_n = self.coords(&self.sol.u);
+        let walls0 = self.model.wall_planes(t);
+        let walls1 = self.model.wall_planes(t + dt);
+        let h = self.model.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min);
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
+        b.walls0 = walls0;
+        b.walls1 = walls1;
+        b.alpha = if dt > 0.0 { 0.0 } else { 1.0 };
+        let reach = b.contact.dhat + if h.is_finite() { h } else { 0.0 };
+        let pairs = b.contact.candidates(&x_n, reach);
+        self.set_barrier_pattern(pairs)?;
+        // the springs of this step: every dof, or only the directions the barrier pairs of the
+        // last converged state do not hold
+        let n_bodies = self.model.bodies.len();
+        let b = self.barrier.as_ref().expect("barrier");
+        let held = || b.eval.body_support(&b.contact, &b.walls0, n_bodies);
+        self.springs.prepare(&self.model.stabilisation, &self.sol.u, &self.u_prev, dt, self.run.dt_prev, self.time.dt, held);
+        Ok(())
+    }
+
+    /// The barrier terms at coordinates `x` (the walls where they are in the step): evaluated,
+    /// with the pattern grown first when a pair within d̂ has no block and a tangent is asked
+    /// for. An iterate where a node touches an edge or a wall is an error (the line search
+    /// backs off; CCD keeps it from happening).
+    pub(super) fn evaluate_barrier(&mut self, x: &[[f64; 2]], tangent: bool) -> Result<(), NewtonFailure> {
+        let _t = self.clock.scope(Phase::ContactAssembly);
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
+        let walls = b.walls_at(b.alpha);
+        b.contact.evaluate(x, &walls, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()))?;
+        if tangent {
+            let missing: Vec<(usize, usize)> = b.eval.edges.iter().map(|e| (e.node, e.segment)).filter(|p| b.pattern.binary_search(p).is_err()).collect();
+            if !missing.is_empty() {
+                let mut pairs = b.pattern.clone();
+                pairs.extend(missing);
+                pairs.sort_unstable();
+                pairs.dedup();
+                tracing::debug!(pairs = pairs.len(), "barrier pattern grows");
+                self.set_barrier_pattern(pairs)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Add the barrier terms of the last evaluation to the internal force and (on the process
+    /// that holds the tangent) the tangent; their statistics become the contact statistics.
+    pub(super) fn add_barrier(&mut self, tangent: bool) {
+        let _t = self.clock.scope(Phase::ContactAssembly);
+        let Some(b) = self.barrier.as_ref() else { return };
+        let sys = &mut self.sys;
+        b.eval.add_gradient(&mut sys.f_int);
+        if tangent {
+            for e in &b.eval.edges {
+                let i = b.pattern.binary_search(&(e.node, e.segment)).expect("the pattern holds every pair within d̂");
+                sys.maps.pairs.add(&mut sys.kk.values, i, e.term.hess.as_flattened());
+            }
+            for w in &b.eval.walls {
+                let i = b.contact.nodes.binary_search_by_key(&w.node, |&(n, _)| n).expect("a boundary node");
+                sys.maps.nodes.add(&mut sys.kk.values, i, w.term.hess.as_flattened());
+            }
+        }
+        self.contact_stats = ContactStats {
+            wall_force: b.eval.wall_force.clone(),
+            max_penetration: 0.0,
+            active: b.eval.edges.len() + b.eval.walls.len(),
+            violation: 0.0,
+        };
+    }
+
+    /// Add to the Newton right-hand side the linearised effect of moving the walls the rest of
+    /// the way through the step (H n Δw on the nodes of the wall pairs, see the module docs).
+    pub(super) fn add_wall_motion(&mut self) {
+        let Some(b) = self.barrier.as_ref() else { return };
+        if b.alpha >= 1.0 {
+            return;
+        }
+        let now = b.walls_at(b.alpha);
+        for w in &b.eval.walls {
+            let (a, z) = (&now[w.wall], &b.walls1[w.wall]);
+            let l = a.normal[0].hypot(a.normal[1]);
+            let n = [a.normal[0] / l, a.normal[1] / l];
+            let advance = (z.point[0] - a.point[0]) * n[0] + (z.point[1] - a.point[1]) * n[1];
+            for i in 0..2 {
+                let q = self.sys.assembler.eq[2 * w.node + i];
+                if q != FIXED {
+                    self.sys.r[q] += (w.term.hess[i][0] * n[0] + w.term.hess[i][1] * n[1]) * advance;
+                }
+            }
+        }
+    }
+
+    /// The largest fraction of the Newton update `du` (every dof) from `u` that keeps every
+    /// node off every edge of another particle and in front of the walls, which move with it
+    /// to their end-of-step positions (CCD with IPC's conservative rescaling).
+    pub(super) fn barrier_step_limit(&mut self, u: &[f64], du: &[f64]) -> f64 {
+        let _t = self.clock.scope(Phase::ContactSearch);
+        let x0 = self.coords(u);
+        let moved: Vec<f64> = u.iter().zip(du).map(|(a, b)| a + b).collect();
+        let x1 = self.coords(&moved);
+        let Some(b) = self.barrier.as_mut() else { return 1.0 };
+        let (w0, w1) = (b.walls_at(b.alpha), b.walls1.clone());
+        b.contact.collision_free_step(&x0, &x1, &w0, &w1)
+    }
+
+    /// Whether the walls have arrived at their end-of-step positions (always without the
+    /// barrier).
+    pub(super) fn walls_arrived(&self) -> bool {
+        self.barrier.as_ref().is_none_or(|b| b.alpha >= 1.0)
+    }
+
+    /// After a converged step: IPC's stiffness update — when the smallest distance is below
+    /// d̂/1000 and still decreasing, κ doubles (up to 10⁴ κ₀), so that gaps stay clear of the
+    /// round-off of the distances without an ill-conditioned start.
+    pub(super) fn commit_barrier(&mut self) {
+        let Some(b) = self.barrier.as_mut() else { return };
+        let d = b.eval.min_distance;
+        if d < 1e-3 * b.contact.dhat && d < b.min_distance && b.contact.kappa < 1e4 * b.kappa0 {
+            b.contact.kappa *= 2.0;
+            tracing::debug!(kappa = b.contact.kappa, min_distance = d, "barrier stiffness doubled");
+        }
+        b.min_distance = d;
+    }
+}
