@@ -123,3 +123,16 @@ fn barrier_keys_are_checked() {
         assert!(err.contains(key), "{err}");
     }
 }
+
+/// Particles that touch at the start (the contact patch test's two blocks) cannot start with the
+/// barrier: a clear error before the first step, not a failure after twenty cut-backs.
+#[test]
+fn touching_particles_are_a_clear_error() {
+    let text = std::fs::read_to_string("jobs/verification/contact_patch.toml").unwrap();
+    assert!(text.contains("method = \"augmented_lagrangian\"\n"));
+    let text = text.replace("method = \"augmented_lagrangian\"\n", "method = \"barrier\"\n");
+    let c = case::parse(&text, Path::new("jobs/verification")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let err = Simulation::new(model, c.time.clone(), c.solver.clone()).err().expect("touching particles accepted").to_string();
+    assert!(err.contains("apart") && err.contains("touches edge"), "{err}");
+}

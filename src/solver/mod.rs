@@ -80,6 +80,8 @@ pub enum SolveError {
     Linear(#[from] LinalgError),
     #[error("re-meshing body {body}: {reason}")]
     Remesh { body: usize, reason: String },
+    #[error("contact: {0}")]
+    Contact(String),
 }
 
 /// A converged but uncommitted step.
@@ -166,6 +168,13 @@ impl Simulation {
             assembler.set_terms(&mut kk, &pair_dofs, &[]);
             b.walls1 = model.wall_planes(0.0);
             b.walls0 = b.walls1.clone();
+            // the barrier starts from boundaries apart: where two touch it is infinite
+            let mut eval = crate::contact::barrier_problem::BarrierEval::default();
+            if let Err(e) = b.contact.evaluate(&model.x0, &b.walls0, false, &mut eval) {
+                return Err(SolveError::Contact(format!(
+                    "{e} at the start: the barrier contact (contact.method = \"barrier\") needs the particles apart from each other at the start (walls may touch them); expected a gap between particles, or another contact.method"
+                )));
+            }
         }
         if let Some(p) = &par {
             assembler.retain_elements(&p.owned_elements);
