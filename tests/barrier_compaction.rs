@@ -106,14 +106,14 @@ fn biaxial_discs_compact_with_the_barrier() {
     }
 }
 
-/// Bad input: the barrier is frictionless for now, its d̂ only goes with it, and it has no
+/// Bad input: the barrier has no ties yet, its d̂ only goes with it, and it has no
 /// master normal — each a clear error naming the key.
 #[test]
 fn barrier_keys_are_checked() {
     let base = std::fs::read_to_string(JOB).unwrap();
     let barrier = base.replace("method = \"penalty\"", "method = \"barrier\"");
     let cases = [
-        (barrier.replace("contact = \"sliding\"", "contact = \"rubbing\"\nfriction = 0.2"), "contact.method"),
+        (barrier.replace("contact = \"sliding\"", "contact = \"cohering\""), "contact.method"),
         (base.replace("method = \"penalty\"", "method = \"penalty\"\ndhat = 0.1"), "contact.dhat"),
         (barrier.replace("method = \"barrier\"", "method = \"barrier\"\ndhat = -1.0"), "contact.dhat"),
         (barrier.replace("method = \"barrier\"", "method = \"barrier\"\nnormal = \"smoothed\""), "contact.normal"),

@@ -473,6 +473,34 @@ mod barrier_battery {
         }
     }
 
+    /// The lagged friction potential μλ f₀(|w·Δx|): gradient and Hessian against finite
+    /// differences in the static regime (|u_T| < ε, both signs) and the sliding one, and the
+    /// mollifier C² at ε (f₀ = ε, f₀' = 1, f₀'' = 0 from below).
+    #[test]
+    fn friction_gradient_and_hessian_in_both_regimes() {
+        let w = [0.6, -0.8, -0.42, 0.56, -0.18, 0.24];
+        let (ml, eps) = (37.0, 1e-3);
+        for scale in [0.3e-3, -0.7e-3, 2.5e-3, -4e-3] {
+            let dx = [scale, -scale * 0.5, 0.1 * scale, 0.2 * scale, -0.3 * scale, 0.05 * scale];
+            let t = friction_term(&w, &dx, ml, eps);
+            let e = |y: &[f64; 6]| friction_term(&w, y, ml, eps).energy;
+            let g = |y: &[f64; 6]| friction_term(&w, y, ml, eps).grad;
+            // the step must stay in one regime: H ≪ the distance of |u_T| from ε
+            close_vec(&t.grad, &fd_grad(&e, &dx), &format!("friction gradient at {scale}"));
+            let u_t: f64 = w.iter().zip(&dx).map(|(a, b)| a * b).sum();
+            if u_t.abs() < eps {
+                close_mat(&t.hess, &fd_jac(&g, &dx), &format!("friction Hessian at {scale}"));
+            } else {
+                // sliding: the force is μλ along ±w whatever the slip, its Hessian zero
+                assert!(t.hess.iter().flatten().all(|h| *h == 0.0));
+                assert!(fd_jac(&g, &dx).iter().flatten().all(|h| h.abs() <= 1e-6 * ml), "friction Hessian at {scale} is not zero");
+                assert!((t.grad[0].abs() - ml * 0.6).abs() < 1e-12);
+            }
+        }
+        let [f0, f1, f2] = friction_mollifier(eps * (1.0 - 1e-9), eps);
+        assert!((f0 - eps).abs() < 1e-12 && (f1 - 1.0).abs() < 1e-8 && f2.abs() < 1e-5, "{f0} {f1} {f2}");
+    }
+
     #[test]
     fn the_projected_hessian_is_positive_semidefinite_and_keeps_the_convex_part() {
         let (dhat, kappa) = (0.3, 1.0);

@@ -304,16 +304,16 @@ impl Cx<'_> {
         contact.walls = wall_kinds;
         if contact.method == ContactMethod::Barrier {
             use crate::contact::ContactKind;
-            if !matches!(contact.kind, ContactKind::Sliding) {
+            if matches!(contact.kind, ContactKind::Cohering) {
                 return Err(self.err(
                     "contact.method",
-                    "value \"barrier\": the barrier contact is frictionless for now (friction and ties with the barrier are not built yet); expected contact.contact = \"sliding\" or another method",
+                    "value \"barrier\": tied (cohering) contact with the barrier is not built yet; expected contact.contact = \"sliding\" or \"rubbing\", or another method",
                 ));
             }
-            if let Some(i) = contact.walls.iter().position(|k| !matches!(k, ContactKind::Sliding)) {
+            if let Some(i) = contact.walls.iter().position(|k| matches!(k, ContactKind::Cohering)) {
                 return Err(self.err(
                     &format!("walls[{i}].contact"),
-                    "the barrier contact (contact.method = \"barrier\") is frictionless for now; expected \"sliding\" or another contact.method",
+                    "tied (cohering) walls with the barrier contact (contact.method = \"barrier\") are not built yet; expected \"sliding\" or \"rubbing\", or another contact.method",
                 ));
             }
         }

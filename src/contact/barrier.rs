@@ -286,6 +286,38 @@ pub fn project_psd<const N: usize>(h: &mut [[f64; N]; N]) {
     }
 }
 
+/// IPC's friction mollifier f₀ on a tangential slip y ≥ 0 (mm) with the transition slip ε
+/// (mm), and its first two derivatives, `[f₀, f₀', f₀'']`: f₀(y) = −y³/(3ε²) + y²/ε + ε/3 below
+/// ε, y above (C² at ε; f₀' rises from 0 to 1, so the friction force μλ f₀' reaches the
+/// Coulomb value μλ once the slip exceeds ε — the static regime is an elastic slip below ε).
+pub fn friction_mollifier(y: f64, eps: f64) -> [f64; 3] {
+    if y >= eps {
+        return [y, 1.0, 0.0];
+    }
+    [-y * y * y / (3.0 * eps * eps) + y * y / eps + eps / 3.0, -y * y / (eps * eps) + 2.0 * y / eps, -2.0 * y / (eps * eps) + 2.0 / eps]
+}
+
+/// The lagged friction of a pair (IPC's lagged, mollified Coulomb friction): the potential
+/// μλ f₀(|u_T|) of the tangential slip u_T = w · Δx over the step, with the normal force λ
+/// (N/mm), the tangent weights w (the tangent at the closest point times the pair's barycentric
+/// weights: +1 on the node, −(1 − s) and −s on the edge's ends) and the slip transition ε
+/// frozen at the lagged state; `dx` is the pair's displacement since the start of the step.
+/// Its gradient is the friction force (a contribution to the internal force) and its Hessian
+/// μλ f₀''(|u_T|) w wᵀ is positive semi-definite.
+pub fn friction_term<const N: usize>(w: &[f64; N], dx: &[f64; N], mu_lambda: f64, eps: f64) -> BarrierTerm<N> {
+    let y: f64 = w.iter().zip(dx).map(|(a, b)| a * b).sum();
+    let [f0, f1, f2] = friction_mollifier(y.abs(), eps);
+    let sign = if y < 0.0 { -1.0 } else { 1.0 };
+    let mut t = BarrierTerm { energy: mu_lambda * f0, grad: [0.0; N], hess: [[0.0; N]; N] };
+    for i in 0..N {
+        t.grad[i] = mu_lambda * f1 * sign * w[i];
+        for k in 0..N {
+            t.hess[i][k] = mu_lambda * f2 * w[i] * w[k];
+        }
+    }
+    t
+}
+
 /// Real roots of c₂ t² + c₁ t + c₀ = 0 in ascending order (a linear or constant equation when
 /// the leading coefficients vanish relative to the others). The constant zero equation gives
 /// no roots (see [`point_edge_toi`] for that case).

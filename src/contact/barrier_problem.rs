@@ -70,6 +70,80 @@ impl BarrierEval {
     }
 }
 
+/// The lagged friction of one barrier pair (see [`super::barrier::friction_term`]): the
+/// pair's dofs (6 for a node and an edge, the first 2 for a node and a wall), its tangent
+/// weights, and μλ, all frozen at the lagged state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrictionPair {
+    /// `Some(segment)` for a node–edge pair, `None` for a node–wall pair.
+    pub segment: Option<usize>,
+    pub node: usize,
+    pub dofs: [usize; 6],
+    pub w: [f64; 6],
+    /// μ times the pair's normal force (N/mm).
+    pub mu_lambda: f64,
+}
+
+impl FrictionPair {
+    /// The friction term at displacements `u` (every dof) from `u0`, the start of the step.
+    pub fn term(&self, u: &[f64], u0: &[f64], eps: f64) -> super::barrier::BarrierTerm<6> {
+        let dx: [f64; 6] = std::array::from_fn(|i| if self.segment.is_some() || i < 2 { u[self.dofs[i]] - u0[self.dofs[i]] } else { 0.0 });
+        super::barrier::friction_term(&self.w, &dx, self.mu_lambda, eps)
+    }
+}
+
+impl BarrierEval {
+    /// The lagged friction of every pair of this evaluation (at configuration `x`, with the
+    /// walls `walls`) whose coefficient is positive: `mu` between particles, `mu_walls[w]`
+    /// against wall w. The normal force λ of a pair is the size of the barrier force on its
+    /// node; the tangent is the edge's direction (or, where the closest point is an end, the
+    /// normal to the line from that end to the node) or the wall's.
+    pub fn friction_pairs(&self, contact: &BarrierContact, x: &[[f64; 2]], walls: &[Wall], mu: f64, mu_walls: &[f64]) -> Vec<FrictionPair> {
+        let mut out = Vec::new();
+        if mu > 0.0 {
+            for e in &self.edges {
+                let lambda = e.term.grad[0].hypot(e.term.grad[1]);
+                let [a, b] = contact.segments[e.segment].nodes;
+                let (p, xa, xb) = (x[e.node], x[a], x[b]);
+                let (t, wa, wb) = match e.region {
+                    PointEdgeRegion::Interior => {
+                        let ed = [xb[0] - xa[0], xb[1] - xa[1]];
+                        let l2 = ed[0] * ed[0] + ed[1] * ed[1];
+                        let s = ((p[0] - xa[0]) * ed[0] + (p[1] - xa[1]) * ed[1]) / l2;
+                        let l = l2.sqrt();
+                        ([ed[0] / l, ed[1] / l], -(1.0 - s), -s)
+                    }
+                    PointEdgeRegion::A | PointEdgeRegion::B => {
+                        let q = if e.region == PointEdgeRegion::A { xa } else { xb };
+                        let d = [p[0] - q[0], p[1] - q[1]];
+                        let l = d[0].hypot(d[1]);
+                        let t = [-d[1] / l, d[0] / l];
+                        if e.region == PointEdgeRegion::A {
+                            (t, -1.0, 0.0)
+                        } else {
+                            (t, 0.0, -1.0)
+                        }
+                    }
+                };
+                let w = [t[0], t[1], wa * t[0], wa * t[1], wb * t[0], wb * t[1]];
+                out.push(FrictionPair { segment: Some(e.segment), node: e.node, dofs: e.dofs, w, mu_lambda: mu * lambda });
+            }
+        }
+        for wt in &self.walls {
+            let m = mu_walls.get(wt.wall).copied().unwrap_or(0.0);
+            if !(m > 0.0) {
+                continue;
+            }
+            let n = unit(walls[wt.wall].normal);
+            let lambda = wt.term.grad[0].hypot(wt.term.grad[1]);
+            let w = [-n[1], n[0], 0.0, 0.0, 0.0, 0.0];
+            let dofs = [2 * wt.node, 2 * wt.node + 1, 2 * wt.node, 2 * wt.node + 1, 2 * wt.node, 2 * wt.node + 1];
+            out.push(FrictionPair { segment: None, node: wt.node, dofs, w, mu_lambda: m * lambda });
+        }
+        out
+    }
+}
+
 /// A configuration that the barrier cannot take: two boundaries touch or cross, or a node is
 /// on or behind a wall.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]

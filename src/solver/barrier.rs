@@ -23,7 +23,7 @@
 
 use super::{NewtonFailure, Phase, Simulation};
 use crate::assembly::FIXED;
-use crate::contact::barrier_problem::{BarrierContact, BarrierEval};
+use crate::contact::barrier_problem::{BarrierContact, BarrierEval, FrictionPair};
 use crate::contact::{ContactStats, Wall};
 
 /// Whether the pair Hessians are projected onto the PSD matrices.
@@ -50,13 +50,30 @@ pub(super) struct BarrierRun {
     pub kappa0: f64,
     /// The smallest element size of the particles (mm).
     pub h_min: f64,
+    /// Friction coefficient between particles and of each wall (0: frictionless).
+    pub mu: f64,
+    pub mu_walls: Vec<f64>,
+    /// The lagged friction of the pairs (frozen normal forces and tangents, updated after
+    /// each converged solve until they stop changing).
+    pub friction: Vec<FrictionPair>,
 }
 
+/// The slip over which the mollified friction rises to its Coulomb value, relative to the
+/// smallest element size: ε = 1e-3 h (IPC's ε_v, here a slip per step).
+pub const FRICTION_EPS: f64 = 1e-3;
+
+/// The lagged friction is converged when no pair's μλ changed by more than this fraction of
+/// the largest one in the last update.
+pub const FRICTION_TOL: f64 = 1e-4;
+
+/// At most this many friction updates a step.
+pub const MAX_FRICTION_UPDATES: usize = 20;
+
 impl BarrierRun {
-    pub fn new(contact: BarrierContact, h_min: f64) -> Self {
+    pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new() }
     }
 
     /// The walls at progress `alpha` through the step (straight between their positions at
@@ -70,6 +87,11 @@ impl BarrierRun {
             .zip(&self.walls1)
             .map(|(a, b)| Wall { point: [a.point[0] + alpha * (b.point[0] - a.point[0]), a.point[1] + alpha * (b.point[1] - a.point[1])], normal: b.normal })
             .collect()
+    }
+
+    /// Whether any contact has friction.
+    pub fn has_friction(&self) -> bool {
+        self.mu > 0.0 || self.mu_walls.iter().any(|&m| m > 0.0)
     }
 
     /// The dofs of the block of pair (node, segment).
@@ -116,6 +138,8 @@ impl Simulation {
         b.alpha = if dt > 0.0 { 0.0 } else { 1.0 };
         let reach = b.contact.dhat + if h.is_finite() { h } else { 0.0 };
         let pairs = b.contact.candidates(&x_n, reach);
+        // the friction of this step, lagged at the converged state (its last evaluation)
+        b.friction = if b.has_friction() { b.eval.friction_pairs(&b.contact, &x_n, &b.walls0, b.mu, &b.mu_walls) } else { Vec::new() };
         self.set_barrier_pattern(pairs)?;
         // the springs of this step: every dof, or only the directions the barrier pairs of the
         // last converged state do not hold
@@ -151,11 +175,33 @@ impl Simulation {
 
     /// Add the barrier terms of the last evaluation to the internal force and (on the process
     /// that holds the tangent) the tangent; their statistics become the contact statistics.
-    pub(super) fn add_barrier(&mut self, tangent: bool) {
+    pub(super) fn add_barrier(&mut self, u: &[f64], tangent: bool) {
         let _t = self.clock.scope(Phase::ContactAssembly);
         let Some(b) = self.barrier.as_ref() else { return };
         let sys = &mut self.sys;
         b.eval.add_gradient(&mut sys.f_int);
+        // the lagged friction: its slip since the start of the step
+        let eps = FRICTION_EPS * b.h_min;
+        for fp in &b.friction {
+            let t = fp.term(u, &self.sol.u, eps);
+            let width = if fp.segment.is_some() { 6 } else { 2 };
+            for i in 0..width {
+                sys.f_int[fp.dofs[i]] += t.grad[i];
+            }
+            if tangent {
+                match fp.segment {
+                    Some(seg) => {
+                        let i = b.pattern.binary_search(&(fp.node, seg)).expect("the pattern holds every lagged pair");
+                        sys.maps.pairs.add(&mut sys.kk.values, i, t.hess.as_flattened());
+                    }
+                    None => {
+                        let i = b.contact.nodes.binary_search_by_key(&fp.node, |&(n, _)| n).expect("a boundary node");
+                        let h = [t.hess[0][0], t.hess[0][1], t.hess[1][0], t.hess[1][1]];
+                        sys.maps.nodes.add(&mut sys.kk.values, i, &h);
+                    }
+                }
+            }
+        }
         if tangent {
             for e in &b.eval.edges {
                 let i = b.pattern.binary_search(&(e.node, e.segment)).expect("the pattern holds every pair within d̂");
@@ -207,6 +253,43 @@ impl Simulation {
         let Some(b) = self.barrier.as_mut() else { return 1.0 };
         let (w0, w1) = (b.walls_at(b.alpha), b.walls1.clone());
         b.contact.collision_free_step(&x0, &x1, &w0, &w1)
+    }
+
+    /// After a converged solve with friction: the friction lagged again at the converged
+    /// configuration `u`; true (solve again) when a pair's μλ changed by more than
+    /// [`FRICTION_TOL`] of the largest, or a pair came or went, and fewer than
+    /// [`MAX_FRICTION_UPDATES`] updates were made.
+    pub(super) fn update_barrier_friction(&mut self, u: &[f64], updates: usize) -> bool {
+        let x = self.coords(u);
+        let Some(b) = self.barrier.as_mut() else { return false };
+        if !b.has_friction() {
+            return false;
+        }
+        let walls = b.walls_at(b.alpha);
+        let new = b.eval.friction_pairs(&b.contact, &x, &walls, b.mu, &b.mu_walls);
+        let key = |f: &FrictionPair| (f.node, f.segment.unwrap_or(usize::MAX));
+        let mut old: Vec<((usize, usize), f64)> = b.friction.iter().map(|f| (key(f), f.mu_lambda)).collect();
+        old.sort_by(|a, c| a.0.cmp(&c.0));
+        let scale = new.iter().chain(&b.friction).map(|f| f.mu_lambda).fold(0.0, f64::max);
+        let mut change: f64 = 0.0;
+        for f in &new {
+            let before = old.binary_search_by(|o| o.0.cmp(&key(f))).map_or(0.0, |i| old[i].1);
+            change = change.max((f.mu_lambda - before).abs());
+        }
+        for (k, v) in &old {
+            if !new.iter().any(|f| key(f) == *k) {
+                change = change.max(*v);
+            }
+        }
+        let again = change > FRICTION_TOL * scale;
+        if again && updates >= MAX_FRICTION_UPDATES {
+            tracing::warn!(change = change / scale.max(f64::MIN_POSITIVE), "lagged friction not converged after the allowed updates");
+            return false;
+        }
+        if again {
+            b.friction = new;
+        }
+        again
     }
 
     /// Whether the walls have arrived at their end-of-step positions (always without the

@@ -159,7 +159,11 @@ impl Simulation {
             assembler.set_terms(&mut kk, &pair_dofs, &multiplier_dofs);
         }
         let h = model.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min);
-        let mut barrier = model.barrier_contact().map(|c| barrier::BarrierRun::new(c, h));
+        let mu_of = |k: &crate::contact::ContactKind| match k {
+            crate::contact::ContactKind::Rubbing { mu } => mu.max(0.0),
+            _ => 0.0,
+        };
+        let mut barrier = model.barrier_contact().map(|c| barrier::BarrierRun::new(c, h, mu_of(&model.contact.kind), model.contact.walls.iter().map(mu_of).collect()));
         if let Some(b) = barrier.as_mut() {
             // the pattern of the pairs within d̂ + h of the reference configuration
             b.pattern = b.contact.candidates(&model.x0, b.contact.dhat + h);

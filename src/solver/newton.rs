@@ -48,8 +48,9 @@ impl Simulation {
                     worst = worst.max((self.sys.trial_fields.theta[e] - 1.0).abs());
                 }
             }
-            let contact_update = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
-                && updates < self.model.contact.max_augmentations;
+            let contact_update = (self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
+                && updates < self.model.contact.max_augmentations)
+                || self.update_barrier_friction(&u, updates);
             if contact_update {
                 if let Some(c) = self.contact.as_mut() {
                     c.augment();

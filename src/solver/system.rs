@@ -218,7 +218,7 @@ impl Simulation {
             self.springs.add(u, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
         }
         if self.barrier.is_some() {
-            self.add_barrier(root_tangent);
+            self.add_barrier(u, root_tangent);
             let sys = &mut self.sys;
             self.springs.add(u, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
         }
