@@ -54,7 +54,7 @@ pub enum ContactMethod {
     /// Incremental Potential Contact: a smoothly clamped log barrier on the distance of every
     /// boundary node to every boundary edge of another particle and to every wall closer than
     /// d̂ ([`barrier`], [`barrier_problem`]), with a line search that never lets an iterate
-    /// cross. Frictionless for now.
+    /// cross; lagged, mollified Coulomb friction. No ties yet.
     Barrier,
 }
 

@@ -260,11 +260,11 @@ impl Simulation {
     /// [`FRICTION_TOL`] of the largest, or a pair came or went, and fewer than
     /// [`MAX_FRICTION_UPDATES`] updates were made.
     pub(super) fn update_barrier_friction(&mut self, u: &[f64], updates: usize) -> bool {
-        let x = self.coords(u);
-        let Some(b) = self.barrier.as_mut() else { return false };
-        if !b.has_friction() {
+        if !self.barrier.as_ref().is_some_and(|b| b.has_friction()) {
             return false;
         }
+        let x = self.coords(u);
+        let Some(b) = self.barrier.as_mut() else { return false };
         let walls = b.walls_at(b.alpha);
         let new = b.eval.friction_pairs(&b.contact, &x, &walls, b.mu, &b.mu_walls);
         let key = |f: &FrictionPair| (f.node, f.segment.unwrap_or(usize::MAX));
