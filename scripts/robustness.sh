@@ -55,9 +55,9 @@ try:
 except (OSError, ValueError):
     print(f"{'timeout' if rc == '124' else 'no summary (exit ' + rc + ')':22s} {'-':>8s} {'-':>6s} {'-':>8s} {'-':>8s} {'-':>8s} {wall:9.1f} 1")
     sys.exit()
-run = s.get("run", {})
-final = s.get("final", {})
-reason = run.get("stop_reason") or s.get("status", "?")
+run = s.get("run") or {}
+final = s.get("final") or {}
+reason = run.get("stop_reason") or s.get("status") or "?"
 steps = run.get("steps") or final.get("step") or 0
 its = run.get("newton_iterations", 0)
 share = final.get("stabilisation_ratio", float("nan"))
