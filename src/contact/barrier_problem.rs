@@ -13,7 +13,7 @@
 //! do not interact (a particle's own boundary never folds onto itself in a compaction).
 
 use super::barrier::{barrier_term, point_edge_region, point_edge_sq_distance, point_edge_toi, point_wall_sq_distance, point_wall_toi, BarrierTerm, PointEdgeRegion, CCD_RESCALING};
-use super::geometry::Wall;
+use super::geometry::{unit, Wall};
 use super::search::ContactSearch;
 use super::Segment;
 
@@ -399,9 +399,4 @@ impl BarrierEval {
         }
         held
     }
-}
-
-fn unit(v: [f64; 2]) -> [f64; 2] {
-    let l = v[0].hypot(v[1]);
-    [v[0] / l, v[1] / l]
 }

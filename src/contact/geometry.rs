@@ -394,7 +394,8 @@ impl Wall {
     }
 }
 
-fn unit(v: [f64; 2]) -> [f64; 2] {
+/// `v` normalised (zero stays zero).
+pub(crate) fn unit(v: [f64; 2]) -> [f64; 2] {
     let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
     if l > 0.0 {
         [v[0] / l, v[1] / l]

@@ -131,8 +131,8 @@ impl Simulation {
         let x_n = self.coords(&self.sol.u);
         let walls0 = self.model.wall_planes(t);
         let walls1 = self.model.wall_planes(t + dt);
-        let h = self.model.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min);
         let Some(b) = self.barrier.as_mut() else { return Ok(()) };
+        let h = b.h_min;
         b.walls0 = walls0;
         b.walls1 = walls1;
         b.alpha = if dt > 0.0 { 0.0 } else { 1.0 };

@@ -203,6 +203,7 @@ impl Simulation {
             }
             // with the barrier the step starts at the largest collision-free fraction of the
             // update (the walls moving with it) and may back off further
+            let barrier = self.barrier.is_some();
             let (eta_max, alpha0, tries) = match self.barrier.as_ref() {
                 Some(b) => {
                     let alpha0 = b.alpha;
@@ -211,6 +212,9 @@ impl Simulation {
                 None => (1.0, 1.0, 6),
             };
             let mut eta = eta_max;
+            // the smallest step accepted anyway, and the one below which an evaluation that
+            // fails fails the solve (the barrier backs off further)
+            let (accept_below, fail_below) = if barrier { (0.06 * eta_max * 1e-2, 0.06 * eta_max * 1e-3) } else { (0.06, 0.06) };
             let r_old = rnorm;
             let mut accepted = false;
             for _ in 0..tries {
@@ -231,7 +235,7 @@ impl Simulation {
                         // (with the barrier a residual that does not grow is enough: the walls
                         // move with the step, and a free motion has a zero residual)
                         let better = rn.is_finite()
-                            && if tries > 6 {
+                            && if barrier {
                                 // the barrier: while the walls move, any admissible iterate; then
                                 // Armijo on the potential, its change along the line by the
                                 // trapezoidal rule on the slopes at both ends (or a residual
@@ -242,14 +246,14 @@ impl Simulation {
                             } else {
                                 rn < r_old || s < 0.9 * energy
                             };
-                        if !line_search || better || eta < 0.06 * eta_max * if tries > 6 { 1e-2 } else { 1.0 } {
+                        if !line_search || better || eta < accept_below {
                             rnorm = rn;
                             accepted = rn.is_finite();
                             break;
                         }
                         eta *= 0.5;
                     }
-                    Err(e) if eta < 0.06 * eta_max * if tries > 6 { 1e-3 } else { 1.0 } => return Err(e),
+                    Err(e) if eta < fail_below => return Err(e),
                     Err(_) => eta *= 0.5,
                 }
             }
