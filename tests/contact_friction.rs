@@ -83,6 +83,24 @@ fn contact_patch_test(text: String, label: &str) {
 /// tie's gaps below 1e-10 of the element size.
 #[test]
 fn tied_blocks_behave_as_one_block() {
+    tied_blocks_against_one_block(&std::fs::read_to_string("jobs/verification/tied_blocks.toml").unwrap(), "augmented Lagrangian");
+}
+
+/// The same with the barrier's ties: the blocks touch along their interface at the start,
+/// every node there is tied at once, and the ties' multipliers are updated until their gaps
+/// are below 1e-10 h (the same 1e-6 criterion against the single block).
+#[test]
+fn tied_blocks_behave_as_one_block_barrier() {
+    let text = std::fs::read_to_string("jobs/verification/tied_blocks.toml")
+        .unwrap()
+        .replace("method = \"augmented_lagrangian\"", "method = \"barrier\"")
+        .replace("penetration_tol = 1e-10\n", "")
+        .replace("max_augmentations = 50\n", "");
+    assert!(text.contains("method = \"barrier\""));
+    tied_blocks_against_one_block(&text, "barrier");
+}
+
+fn tied_blocks_against_one_block(text: &str, label: &str) {
     let run = |text: &str| {
         let c = case::parse(text, std::path::Path::new("jobs/verification")).unwrap();
         let model = Model::from_case(&c).unwrap();
@@ -90,7 +108,7 @@ fn tied_blocks_behave_as_one_block() {
         sim.run(&mut |_, _| {}).unwrap();
         sim
     };
-    let tied = run(&std::fs::read_to_string("jobs/verification/tied_blocks.toml").unwrap());
+    let tied = run(text);
     // the same block in one piece: 5 x 6 elements, 10 x 10 mm
     let one = std::fs::read_to_string("jobs/verification/tied_blocks.toml")
         .unwrap()
@@ -115,7 +133,7 @@ fn tied_blocks_behave_as_one_block() {
             worst = worst.max((single.sol.u[2 * n + c] - tied.sol.u[2 * m + c]).abs() / umax);
         }
     }
-    eprintln!("tied blocks vs one block: max |du| / max |u| = {worst:.3e}");
-    assert!(worst < 1e-6, "tied blocks differ from one block by {worst}");
+    eprintln!("tied blocks ({label}) vs one block: max |du| / max |u| = {worst:.3e}");
+    assert!(worst < 1e-6, "tied blocks ({label}) differ from one block by {worst}");
 }
 

@@ -92,6 +92,65 @@ impl FrictionPair {
     }
 }
 
+/// A tie of cohering particles (`contact = "cohering"` with the barrier): a boundary node
+/// held at a fixed offset from a point of an edge of another particle, the point at the
+/// fraction ξ along the edge where the node was closest when the tie was made. The tie is a
+/// bond, not a contact: the node and the particle it is tied to leave the barrier (and the
+/// collision detection) for good, and the tie holds the offset in both directions, in
+/// tension as in compression and against slip.
+///
+/// Its potential is an augmented Lagrangian on the gap vector g = x_p − (1 − ξ) x_a − ξ x_b − o
+/// (o the offset when made): Π = ½ k |g|² + λ·g, with the multiplier λ updated to λ + k g
+/// after each converged solve until |g| is below the tolerance (Uzawa). The offset is fixed in
+/// the global frame: a tie is made within d̂ (a few thousandths of an element), so a rotation
+/// θ of the pair moves its ends by at most d̂ θ against each other.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tie {
+    pub node: usize,
+    pub segment: usize,
+    /// Global dofs `[p, a, b]`.
+    pub dofs: [usize; 6],
+    pub xi: f64,
+    /// The offset o of the node from the edge's point (mm).
+    pub offset: [f64; 2],
+    /// The multiplier λ (N/mm): the tie's force on the node is −(k g + λ).
+    pub lambda: [f64; 2],
+    /// λ at the last converged step (a step that fails starts again from it).
+    pub lambda0: [f64; 2],
+}
+
+impl Tie {
+    /// The weights of the gap vector on the node and the edge's ends.
+    fn weights(&self) -> [f64; 3] {
+        [1.0, -(1.0 - self.xi), -self.xi]
+    }
+
+    /// The gap vector g at coordinates `x` (mm).
+    pub fn gap(&self, x: &[[f64; 2]], segments: &[Segment]) -> [f64; 2] {
+        let [a, b] = segments[self.segment].nodes;
+        let w = self.weights();
+        std::array::from_fn(|c| w[0] * x[self.node][c] + w[1] * x[a][c] + w[2] * x[b][c] - self.offset[c])
+    }
+
+    /// The tie's potential term with stiffness `k` (N/mm) at coordinates `x`: its energy,
+    /// gradient over `dofs` and (constant) Hessian k w wᵀ ⊗ I.
+    pub fn term(&self, x: &[[f64; 2]], segments: &[Segment], k: f64) -> BarrierTerm<6> {
+        let g = self.gap(x, segments);
+        let w = self.weights();
+        let f = [k * g[0] + self.lambda[0], k * g[1] + self.lambda[1]];
+        let mut term = BarrierTerm::<6> { energy: 0.5 * k * (g[0] * g[0] + g[1] * g[1]) + self.lambda[0] * g[0] + self.lambda[1] * g[1], grad: [0.0; 6], hess: [[0.0; 6]; 6] };
+        for i in 0..3 {
+            for c in 0..2 {
+                term.grad[2 * i + c] = w[i] * f[c];
+                for j in 0..3 {
+                    term.hess[2 * i + c][2 * j + c] = k * w[i] * w[j];
+                }
+            }
+        }
+        term
+    }
+}
+
 impl BarrierEval {
     /// The lagged friction of every pair of this evaluation (at configuration `x`, with the
     /// walls `walls`) whose coefficient is positive: `mu` between particles, `mu_walls[w]`
@@ -169,6 +228,10 @@ pub struct BarrierContact {
     /// node to a wall is measured from there, so that a particle that touches a wall at the
     /// start is inside the barrier, not on its singularity (see [`BarrierContact::of_bodies`]).
     pub wall_offset: f64,
+    /// The ties of cohering particles, and every (node, body) a tie keeps out of the barrier,
+    /// sorted.
+    pub ties: Vec<Tie>,
+    pub tied: Vec<(usize, usize)>,
 }
 
 /// The default activation distance d̂: 1/20 of the smallest element size `h_min` (mm) of the
@@ -211,7 +274,7 @@ impl BarrierContact {
 
     pub fn new(segments: Vec<Segment>, nodes: Vec<(usize, usize)>, dhat: f64, kappa: f64) -> Self {
         let search = ContactSearch::new(segments.clone());
-        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0 }
+        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new() }
     }
 
     /// The barrier terms at coordinates `x` (every node) with the walls `walls` where they are;
@@ -228,6 +291,9 @@ impl BarrierContact {
         self.search.update(x);
         for (node, s) in self.search.pairs(x, &self.nodes, self.dhat) {
             let seg = self.segments[s];
+            if self.is_tied(node, seg.body) {
+                continue;
+            }
             let (p, a, b) = (x[node], x[seg.nodes[0]], x[seg.nodes[1]]);
             let d = point_edge_sq_distance(p, a, b);
             if !(d.d2 > 0.0) {
@@ -290,7 +356,7 @@ impl BarrierContact {
         let mut count = 0;
         for &(node, body) in &self.nodes {
             let p = x[node];
-            let inside = (0..n_bodies).filter(|&b| b != body).any(|b| {
+            let inside = (0..n_bodies).filter(|&b| b != body && !self.is_tied(node, b)).any(|b| {
                 let bb = boxes[b];
                 if p[0] <= bb[0] || p[0] >= bb[2] || p[1] <= bb[1] || p[1] >= bb[3] {
                     return false;
@@ -319,6 +385,56 @@ impl BarrierContact {
         count
     }
 
+    /// Whether `node` is tied to particle `body` (and so out of its barrier).
+    pub fn is_tied(&self, node: usize, body: usize) -> bool {
+        !self.tied.is_empty() && self.tied.binary_search(&(node, body)).is_ok()
+    }
+
+    /// Tie every boundary node that is within d̂ of an edge of another particle it is not yet
+    /// tied to (distance zero included: particles that touch at the start) to the closest such
+    /// edge of that particle, at `x`. With `eval`, the evaluation of the barrier at `x`, a new
+    /// tie takes over the barrier's force on its node as its multiplier, so that the state
+    /// stays in balance. Returns how many ties were made.
+    pub fn tie_close(&mut self, x: &[[f64; 2]], eval: Option<&BarrierEval>) -> usize {
+        self.search.update(x);
+        // the closest edge of every (node, other particle) within d̂
+        let mut best: std::collections::BTreeMap<(usize, usize), (usize, f64)> = std::collections::BTreeMap::new();
+        for (node, s) in self.search.pairs(x, &self.nodes, self.dhat) {
+            let seg = self.segments[s];
+            if self.is_tied(node, seg.body) {
+                continue;
+            }
+            let d2 = point_edge_sq_distance(x[node], x[seg.nodes[0]], x[seg.nodes[1]]).d2;
+            if d2 >= self.dhat * self.dhat {
+                continue;
+            }
+            let e = best.entry((node, seg.body)).or_insert((s, d2));
+            if d2 < e.1 {
+                *e = (s, d2);
+            }
+        }
+        for (&(node, body), &(s, _)) in &best {
+            let [a, b] = self.segments[s].nodes;
+            let (p, xa, xb) = (x[node], x[a], x[b]);
+            let e = [xb[0] - xa[0], xb[1] - xa[1]];
+            let l2 = e[0] * e[0] + e[1] * e[1];
+            let xi = if l2 > 0.0 { (((p[0] - xa[0]) * e[0] + (p[1] - xa[1]) * e[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+            let offset = [p[0] - xa[0] - xi * e[0], p[1] - xa[1] - xi * e[1]];
+            // the barrier's force on the node from that particle's edges
+            let mut lambda = [0.0; 2];
+            if let Some(ev) = eval {
+                for t in ev.edges.iter().filter(|t| t.node == node && self.segments[t.segment].body == body) {
+                    lambda[0] += t.term.grad[0];
+                    lambda[1] += t.term.grad[1];
+                }
+            }
+            self.ties.push(Tie { node, segment: s, dofs: [2 * node, 2 * node + 1, 2 * a, 2 * a + 1, 2 * b, 2 * b + 1], xi, offset, lambda, lambda0: lambda });
+            self.tied.push((node, body));
+        }
+        self.tied.sort_unstable();
+        best.len()
+    }
+
     /// Every node–edge pair (of different particles) closer than `reach` at `x`, sorted.
     pub fn candidates(&mut self, x: &[[f64; 2]], reach: f64) -> Vec<(usize, usize)> {
         self.search.update(x);
@@ -341,6 +457,9 @@ impl BarrierContact {
             self.search.update(x0);
             for (node, s) in self.search.pairs(x0, &self.nodes, 2.0 * reach * (1.0 + 1e-9)) {
                 let seg = self.segments[s];
+                if self.is_tied(node, seg.body) {
+                    continue;
+                }
                 let [a, b] = seg.nodes;
                 if let Some(t) = point_edge_toi([x0[node], x0[a], x0[b]], [x1[node], x1[a], x1[b]]) {
                     toi = toi.min(t);

@@ -56,7 +56,29 @@ pub(super) struct BarrierRun {
     /// The lagged friction of the pairs (frozen normal forces and tangents, updated after
     /// each converged solve until they stop changing).
     pub friction: Vec<FrictionPair>,
+    /// Cohering particles: a node within d̂ of another particle at the end of a step (or at
+    /// the start) is tied to it ([`crate::contact::barrier_problem::Tie`]), with this stiffness
+    /// (N/mm; 0 without ties).
+    pub tie_stiffness: f64,
+    /// The size of the assembly L (mm: the largest coordinate of the reference configuration)
+    /// and the round-off of the ties' forces, 8 ε k L √(number of ties) (N/mm).
+    pub extent: f64,
+    pub tie_floor: f64,
+    /// The largest tie gap after the last multiplier update of this step (mm).
+    pub tie_gap: f64,
 }
+
+/// The stiffness of a tie relative to the softest particle's Young's modulus: k = 100 E
+/// (N/mm). Each multiplier update then shrinks a tie's gap by about the ratio of the
+/// particles' own stiffness at the node (of the order of E) to k, a factor 100 an update.
+pub const TIE_STIFFNESS: f64 = 100.0;
+
+/// The ties are converged when no tie's gap exceeds this fraction of the smallest element
+/// size (the tied blocks of `jobs/verification/` then match one block to 1e-6).
+pub const TIE_TOL: f64 = 1e-10;
+
+/// At most this many multiplier updates of the ties a step.
+pub const MAX_TIE_UPDATES: usize = 20;
 
 /// The slip over which the mollified friction rises to its Coulomb value, relative to the
 /// smallest element size: ε = 1e-3 h (IPC's ε_v, here a slip per step).
@@ -70,10 +92,25 @@ pub const FRICTION_TOL: f64 = 1e-4;
 pub const MAX_FRICTION_UPDATES: usize = 20;
 
 impl BarrierRun {
-    pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>) -> Self {
+    pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new() }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY }
+    }
+
+    /// The round-off of the ties' forces, after ties were made.
+    pub fn update_tie_floor(&mut self) {
+        self.tie_floor = 8.0 * f64::EPSILON * self.tie_stiffness * self.extent * (self.contact.ties.len() as f64).sqrt();
+    }
+
+    /// The pairs the pattern needs besides the barrier's: the ties', sorted into `pairs`.
+    pub fn with_ties(&self, mut pairs: Vec<(usize, usize)>) -> Vec<(usize, usize)> {
+        if !self.contact.ties.is_empty() {
+            pairs.extend(self.contact.ties.iter().map(|t| (t.node, t.segment)));
+            pairs.sort_unstable();
+            pairs.dedup();
+        }
+        pairs
     }
 
     /// The walls at progress `alpha` through the step (straight between their positions at
@@ -137,7 +174,13 @@ impl Simulation {
         b.walls1 = walls1;
         b.alpha = if dt > 0.0 { 0.0 } else { 1.0 };
         let reach = b.contact.dhat + if h.is_finite() { h } else { 0.0 };
-        let pairs = b.contact.candidates(&x_n, reach);
+        // the ties' multipliers as the last converged step left them
+        for t in &mut b.contact.ties {
+            t.lambda = t.lambda0;
+        }
+        b.tie_gap = f64::INFINITY;
+        let near = b.contact.candidates(&x_n, reach);
+        let pairs = b.with_ties(near);
         // the friction of this step, lagged at the converged state (its last evaluation)
         b.friction = if b.has_friction() { b.eval.friction_pairs(&b.contact, &x_n, &b.walls0, b.mu, &b.mu_walls) } else { Vec::new() };
         self.set_barrier_pattern(pairs)?;
@@ -202,6 +245,20 @@ impl Simulation {
                 }
             }
         }
+        // the ties
+        if !b.contact.ties.is_empty() {
+            let x = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + u[2 * n], p[1] + u[2 * n + 1]]).collect::<Vec<_>>();
+            for tie in &b.contact.ties {
+                let t = tie.term(&x, &b.contact.segments, b.tie_stiffness);
+                for i in 0..6 {
+                    sys.f_int[tie.dofs[i]] += t.grad[i];
+                }
+                if tangent {
+                    let i = b.pattern.binary_search(&(tie.node, tie.segment)).expect("the pattern holds every tie");
+                    sys.maps.pairs.add(&mut sys.kk.values, i, t.hess.as_flattened());
+                }
+            }
+        }
         if tangent {
             for e in &b.eval.edges {
                 let i = b.pattern.binary_search(&(e.node, e.segment)).expect("the pattern holds every pair within d̂");
@@ -215,7 +272,7 @@ impl Simulation {
         self.contact_stats = ContactStats {
             wall_force: b.eval.wall_force.clone(),
             max_penetration: 0.0,
-            active: b.eval.edges.len() + b.eval.walls.len(),
+            active: b.eval.edges.len() + b.eval.walls.len() + b.contact.ties.len(),
             violation: 0.0,
         };
     }
@@ -292,6 +349,44 @@ impl Simulation {
         again
     }
 
+    /// After a converged solve with ties: Uzawa's update of their multipliers, λ ← λ + k g;
+    /// true (solve again) when a tie's gap exceeds [`TIE_TOL`] × h, the last update at least
+    /// halved the largest gap, and fewer than [`MAX_TIE_UPDATES`] updates were made.
+    ///
+    /// The updates stall where closing a tie's gap means compressing a stiffer neighbour — a
+    /// barrier pair at a small gap next to a new tie, whose stiffness 2κd̂⁴/d² exceeds the
+    /// tie's 100 E by orders of magnitude: the largest gap then shrank by 2 % an update on the
+    /// tied 2 × 2 discs (measured). There the ties stay penalties of 100 E for the step, with a
+    /// gap of at most ~1e-4 h, and the solve is not repeated for nothing.
+    pub(super) fn update_barrier_ties(&mut self, u: &[f64], updates: usize) -> bool {
+        if !self.barrier.as_ref().is_some_and(|b| !b.contact.ties.is_empty()) {
+            return false;
+        }
+        let x = self.coords(u);
+        let Some(b) = self.barrier.as_mut() else { return false };
+        let k = b.tie_stiffness;
+        let segments = &b.contact.segments;
+        let worst = b.contact.ties.iter().map(|t| t.gap(&x, segments)).map(|g| g[0].hypot(g[1])).fold(0.0, f64::max);
+        if worst <= TIE_TOL * b.h_min {
+            return false;
+        }
+        if worst > 0.5 * b.tie_gap {
+            tracing::debug!(gap = worst, last = b.tie_gap, "tie updates stall: the ties stay penalties for this step");
+            return false;
+        }
+        b.tie_gap = worst;
+        if updates >= MAX_TIE_UPDATES {
+            tracing::warn!(gap = worst, tol = TIE_TOL * b.h_min, "ties not converged after the allowed updates");
+            return false;
+        }
+        let gaps: Vec<[f64; 2]> = b.contact.ties.iter().map(|t| t.gap(&x, segments)).collect();
+        for (t, g) in b.contact.ties.iter_mut().zip(gaps) {
+            t.lambda[0] += k * g[0];
+            t.lambda[1] += k * g[1];
+        }
+        true
+    }
+
     /// Whether the walls have arrived at their end-of-step positions (always without the
     /// barrier).
     pub(super) fn walls_arrived(&self) -> bool {
@@ -301,8 +396,24 @@ impl Simulation {
     /// After a converged step: IPC's stiffness update — when the smallest distance is below
     /// d̂/1000 and still decreasing, κ doubles (up to 10⁴ κ₀), so that gaps stay clear of the
     /// round-off of the distances without an ill-conditioned start.
-    pub(super) fn commit_barrier(&mut self) {
+    /// With cohering particles, every node now within d̂ of another particle is tied to it
+    /// (its barrier force becomes the tie's multiplier), at the converged displacements `u`.
+    pub(super) fn commit_barrier(&mut self, u: &[f64]) {
+        if self.barrier.is_none() {
+            return;
+        }
+        let x = self.coords(u);
         let Some(b) = self.barrier.as_mut() else { return };
+        for t in &mut b.contact.ties {
+            t.lambda0 = t.lambda;
+        }
+        if b.tie_stiffness > 0.0 {
+            let made = b.contact.tie_close(&x, Some(&b.eval));
+            if made > 0 {
+                b.update_tie_floor();
+                tracing::debug!(made, ties = b.contact.ties.len(), "particles tied");
+            }
+        }
         let d = b.eval.min_distance;
         if d < 1e-3 * b.contact.dhat && d < b.min_distance && b.contact.kappa < 1e4 * b.kappa0 {
             b.contact.kappa *= 2.0;

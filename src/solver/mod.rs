@@ -90,6 +90,8 @@ struct Trial {
     lambda: Vec<f64>,
     worst: f64,
     iterations: usize,
+    /// Newton iterations of the first solve (before any multiplier or friction update).
+    first_iterations: usize,
     updates: usize,
     residual: f64,
 }
@@ -163,10 +165,23 @@ impl Simulation {
             crate::contact::ContactKind::Rubbing { mu } => mu.max(0.0),
             _ => 0.0,
         };
-        let mut barrier = model.barrier_contact().map(|c| barrier::BarrierRun::new(c, h, mu_of(&model.contact.kind), model.contact.walls.iter().map(mu_of).collect()));
+        // cohering particles with the barrier: ties of stiffness 100 E (softest particle)
+        let tie_stiffness = if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
+            barrier::TIE_STIFFNESS * model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).fold(f64::INFINITY, f64::min)
+        } else {
+            0.0
+        };
+        let mut barrier = model.barrier_contact().map(|c| barrier::BarrierRun::new(c, h, mu_of(&model.contact.kind), model.contact.walls.iter().map(mu_of).collect(), tie_stiffness));
         if let Some(b) = barrier.as_mut() {
+            // cohering particles that touch (or nearly) at the start are tied at once
+            if tie_stiffness > 0.0 {
+                b.extent = model.x0.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max);
+                b.contact.tie_close(&model.x0, None);
+                b.update_tie_floor();
+            }
             // the pattern of the pairs within d̂ + h of the reference configuration
-            b.pattern = b.contact.candidates(&model.x0, b.contact.dhat + h);
+            let near = b.contact.candidates(&model.x0, b.contact.dhat + h);
+            b.pattern = b.with_ties(near);
             pair_dofs = b.pattern.iter().map(|&p| b.pair_dofs(p)).collect();
             node_dofs = b.node_dofs.clone();
             assembler.set_terms(&mut kk, &pair_dofs, &[]);
@@ -276,6 +291,7 @@ impl Simulation {
             last_wall_force: vec![0.0; n_walls],
             remesh_baseline: vec![None; model.bodies.len()],
             last_report: None,
+            last_step_easy: false,
         };
         let mut sim = Self {
             model,
@@ -459,6 +475,16 @@ impl Simulation {
     /// None without the barrier.
     pub fn barrier_gap(&self) -> Option<(f64, f64)> {
         self.barrier.as_ref().map(|b| (b.eval.min_distance, b.contact.dhat))
+    }
+
+    /// With the barrier's ties (cohering particles): how many ties hold, and the largest gap
+    /// of a tie in the committed state (mm; see [`crate::contact::barrier_problem::Tie`]).
+    /// None without the barrier.
+    pub fn barrier_ties(&self) -> Option<(usize, f64)> {
+        let b = self.barrier.as_ref()?;
+        let x = self.coords(&self.sol.u);
+        let gap = b.contact.ties.iter().map(|t| t.gap(&x, &b.contact.segments)).map(|g| g[0].hypot(g[1])).fold(0.0, f64::max);
+        Some((b.contact.ties.len(), gap))
     }
 
     /// With the barrier: how many boundary nodes of the committed state lie inside another

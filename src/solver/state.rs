@@ -93,4 +93,7 @@ pub struct RunState {
     pub remesh_baseline: Vec<Option<crate::remesh::QualityCheck>>,
     /// The report of the last converged step (for the jam test and the summary).
     pub last_report: Option<StepReport>,
+    /// Whether the last converged step was easy (the next one may grow).
+    #[serde(default)]
+    pub last_step_easy: bool,
 }

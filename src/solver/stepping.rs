@@ -45,7 +45,7 @@ impl Simulation {
                 }
                 Err(e) => return Err(e),
             };
-            self.run.next_dt = if report.cutbacks == 0 && report.newton_iterations <= self.time.easy_iterations {
+            self.run.next_dt = if report.cutbacks == 0 && self.run.last_step_easy {
                 (report.dt * self.time.growth).min(self.time.dt_max)
             } else {
                 report.dt
@@ -250,7 +250,7 @@ impl Simulation {
         if let Some(c) = self.contact.as_mut() {
             c.commit();
         }
-        self.commit_barrier();
+        self.commit_barrier(&trial.u);
         self.u_prev.copy_from_slice(&self.sol.u);
         self.sol.u = trial.u;
         self.sol.lambda = trial.lambda;
@@ -262,6 +262,13 @@ impl Simulation {
         self.run.dt_prev = dt;
         self.run.step += 1;
         self.run.total_iterations += trial.iterations;
+        // an easy step may grow the next one: few Newton iterations in all, or with the
+        // barrier in its first solve (the re-solves after an update of the lagged friction
+        // start next to their solution and take 1–3 iterations each; counting them held a
+        // frictional run at its smallest step size for good: robustness case 02 took 475
+        // steps with this rule against 599 without, measured)
+        let counted = if self.barrier.is_some() { trial.first_iterations } else { trial.iterations };
+        self.run.last_step_easy = counted <= self.time.easy_iterations;
         let x = self.coords(&self.sol.u);
         let areas = self.model.body_areas(&x);
         let total: f64 = areas.iter().sum();
