@@ -66,6 +66,9 @@ pub(super) struct BarrierRun {
     pub tie_floor: f64,
     /// The largest tie gap after the last multiplier update of this step (mm).
     pub tie_gap: f64,
+    /// Forces below this are round-off: 1e-13 K L with K the largest shear modulus or bulk
+    /// penalty (incompressible particles) and L the square root of the particles' area (N/mm).
+    pub stiffness_floor: f64,
 }
 
 /// The stiffness of a tie relative to the softest particle's Young's modulus: k = 100 E
@@ -95,7 +98,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0 }
     }
 
     /// The round-off of the ties' forces, after ties were made.

@@ -361,13 +361,14 @@ impl Simulation {
     }
 
     /// The residual norm below which forces are round-off: the run's floor (from the
-    /// particles' stiffness and size), or with the barrier's ties the round-off of their forces
+    /// particles' shear modulus and size; with the barrier, the bulk penalty of incompressible
+    /// particles counts too), or with the barrier's ties the round-off of their forces
     /// k g, where g is a difference of coordinates of up to the assembly's size L: 8 ε k L per
     /// tie, summed in quadrature (1e-6 N with 70 ties of 100 E = 6.4e6 N/mm over 100 mm, more
     /// than the loads of a loose tied network hold at a relative 1e-8, measured).
     pub(super) fn force_floor(&self) -> f64 {
-        let ties = self.barrier.as_ref().map_or(0.0, |b| b.tie_floor);
-        self.run.force_floor.max(ties)
+        let barrier = self.barrier.as_ref().map_or(0.0, |b| b.tie_floor.max(b.stiffness_floor));
+        self.run.force_floor.max(barrier)
     }
 
     pub(super) fn volumetric(&self, lambda: &[f64]) -> Vec<Volumetric> {
