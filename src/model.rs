@@ -103,14 +103,18 @@ pub struct Model {
 
 /// Whether the global tangent is symmetric: every material's consistent tangent is, no load
 /// is a follower pressure, and, when bodies can touch (`contact`: the contact parameters and
-/// the number of bodies), the contact is frictionless everywhere, not enforced by Lagrange
-/// multipliers and uses the segment normal between particles (the smoothed normal's tangent
-/// is not symmetric, see [`crate::contact::smooth`]). The one place that decides it, and with
-/// it Cholesky against LU ([`crate::linalg::LinearChoice::resolve`]).
+/// the number of bodies), the contact is the barrier (its barrier, lagged friction and ties
+/// are potentials: their Hessians are symmetric, checked against finite differences in
+/// `tests/contact_conformance.rs` and [`crate::contact::barrier_problem`]), or is frictionless
+/// everywhere, not enforced by Lagrange multipliers and uses the segment normal between
+/// particles (the smoothed normal's tangent is not symmetric, see [`crate::contact::smooth`]).
+/// The one place that decides it, and with it Cholesky against LU
+/// ([`crate::linalg::LinearChoice::resolve`]).
 pub fn symmetric_tangent<'a>(materials: impl IntoIterator<Item = &'a Material>, follower_loads: bool, contact: Option<(&ContactParams, usize)>) -> bool {
     let frictionless = |k: &ContactKind| matches!(k, ContactKind::Sliding);
     let contact_ok = contact.is_none_or(|(c, n_bodies)| {
-        frictionless(&c.kind) && c.walls.iter().all(frictionless) && c.method != ContactMethod::Lagrange && (n_bodies < 2 || c.normal != ContactNormal::Smoothed)
+        c.method == ContactMethod::Barrier
+            || (frictionless(&c.kind) && c.walls.iter().all(frictionless) && c.method != ContactMethod::Lagrange && (n_bodies < 2 || c.normal != ContactNormal::Smoothed))
     });
     materials.into_iter().all(|m| m.symmetric_tangent()) && !follower_loads && contact_ok
 }
