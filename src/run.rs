@@ -548,11 +548,12 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             let done = progress(r.time, t_end, solid);
             reporter.step(&Progress { report: r, done, solid_ratio: phi, target, elapsed_s: started.elapsed().as_secs_f64() });
         }
-        let signal = opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
+        let mut signal = opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
         if comm.size() > 1 {
             // every rank stops after the same step: rank 0's flag decides (see `run_rank`)
             let mut stop = [signal as f64];
             comm.broadcast(&mut stop);
+            signal = stop[0] as usize;
         }
         let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
         if signal != 0 || due {
