@@ -223,6 +223,8 @@ impl Simulation {
     /// that holds the tangent) the tangent; their statistics become the contact statistics.
     pub(super) fn add_barrier(&mut self, u: &[f64], tangent: bool) {
         let _t = self.clock.scope(Phase::ContactAssembly);
+        // the coordinates for the ties (none needed without them)
+        let x = self.barrier.as_ref().is_some_and(|b| !b.contact.ties.is_empty()).then(|| self.coords(u));
         let Some(b) = self.barrier.as_ref() else { return };
         let sys = &mut self.sys;
         b.eval.add_gradient(&mut sys.f_int);
@@ -249,8 +251,7 @@ impl Simulation {
             }
         }
         // the ties
-        if !b.contact.ties.is_empty() {
-            let x = self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + u[2 * n], p[1] + u[2 * n + 1]]).collect::<Vec<_>>();
+        if let Some(x) = &x {
             for tie in &b.contact.ties {
                 let t = tie.term(&x, &b.contact.segments, b.tie_stiffness);
                 for i in 0..6 {
@@ -369,7 +370,8 @@ impl Simulation {
         let Some(b) = self.barrier.as_mut() else { return false };
         let k = b.tie_stiffness;
         let segments = &b.contact.segments;
-        let worst = b.contact.ties.iter().map(|t| t.gap(&x, segments)).map(|g| g[0].hypot(g[1])).fold(0.0, f64::max);
+        let gaps: Vec<[f64; 2]> = b.contact.ties.iter().map(|t| t.gap(&x, segments)).collect();
+        let worst = gaps.iter().map(|g| g[0].hypot(g[1])).fold(0.0, f64::max);
         if worst <= TIE_TOL * b.h_min {
             return false;
         }
@@ -382,7 +384,6 @@ impl Simulation {
             tracing::warn!(gap = worst, tol = TIE_TOL * b.h_min, "ties not converged after the allowed updates");
             return false;
         }
-        let gaps: Vec<[f64; 2]> = b.contact.ties.iter().map(|t| t.gap(&x, segments)).collect();
         for (t, g) in b.contact.ties.iter_mut().zip(gaps) {
             t.lambda[0] += k * g[0];
             t.lambda[1] += k * g[1];
