@@ -279,6 +279,9 @@ fn solve_checked(
         rel = new_rel;
         *refinements += 1;
     }
+    if rel > cfg.target {
+        tracing::debug!(relative_residual = rel, refinements = *refinements, "direct solve above the refinement target");
+    }
     if rel.is_nan() || rel > cfg.singular_tol {
         return Err(LinalgError::Singular(format!(
             "relative residual {rel:.3e} after the direct solve exceeds {:.1e} \
@@ -673,6 +676,7 @@ impl Factorisation for CholeskyFactors {
                 tracing::debug!("faer's intranode LBLᵀ panicked on this matrix; trying LDLᵀ");
             }
             if done.is_some() && self.l_values.iter().chain(&self.subdiag).all(|v| v.is_finite()) {
+                tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, factorised as LBLᵀ");
                 self.kind = Some(CholeskyKind::Lblt);
                 return Ok(());
             }
@@ -691,6 +695,7 @@ impl Factorisation for CholeskyFactors {
         };
         match ldlt {
             Ok(()) if self.l_values.iter().all(|v| v.is_finite()) => {
+                tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, factorised as LDLᵀ without pivoting");
                 self.kind = Some(CholeskyKind::Ldlt);
                 Ok(())
             }

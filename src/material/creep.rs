@@ -52,6 +52,15 @@
 //!   D = 2G (1 − 3GΔε̄ᶜ/q_tr) I_dev + 6G² (Δε̄ᶜ/q_tr − 1/(3G + H)) N̂ ⊗ N̂.
 //! ```
 //! For m = 0 this is H = q/(n Δε̄ᶜ).
+//!
+//! ## Symmetry: the update is variational
+//! Within a step the history ε̄ᶜ_n and the time factor C are fixed, so the return's stress is a
+//! function of the increment alone, q = k(x) := (φ(x)/C)^(1/n), increasing in x. The return
+//! q_tr − 3Gx = k(x) is then the stationarity condition of the convex incremental potential
+//! (q_tr − 3Gx)²/(6G) + ∫₀ˣ k, for every m < 1 (not only m = 0), exactly as for J2 with
+//! σ_y replaced by k ([`super::j2`]). τ′ derives from a potential of F and `cc` has major
+//! symmetry (check (d) of `tests/material_conformance.rs`, 1e-10), hence
+//! `symmetric_tangent() == true`.
 // `!(x > 0.0)` is used on purpose: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 use super::logstrain::exponential_map_update;
@@ -303,7 +312,7 @@ impl ConstitutiveLaw for Creep {
         (self.e, self.nu)
     }
     fn symmetric_tangent(&self) -> bool {
-        false
+        true
     }
     fn update(
         &self,

@@ -12,8 +12,24 @@
 //!
 //! Tangent: D = 2G(1 − 3GΔγ/q_tr) I_dev + 6G²(Δγ/q_tr − 1/(3G + H)) N̂ ⊗ N̂ (Box 7.4, H the
 //! table slope on the segment holding the solution), pushed to the spatial `cc` through
-//! L = ∂ ln b/∂b; the product D : L : (l b + b lᵀ) is not symmetric in general, hence
-//! `symmetric_tangent() == false`.
+//! L = ∂ ln b/∂b.
+//!
+//! ## Symmetry: the update is variational
+//! With the history (C_p⁻¹, ε̄ᵖ_n) frozen over the step, the return above is the minimiser of
+//! an incremental potential of F alone,
+//!
+//! ```text
+//!   W(F) = min over Δγ ≥ 0 of  G ‖dev ε_tr(F) − √(3/2) Δγ N̂‖² + ∫ σ_y(ε̄) dε̄ over [ε̄ᵖ_n, ε̄ᵖ_n + Δγ],
+//! ```
+//!
+//! (stationarity in Δγ is q_tr − 3GΔγ = σ_y(ε̄ᵖ_n + Δγ), the return map; Ortiz & Stainier
+//! 1999, Miehe 2002 for the exponential map with Hencky elasticity). So τ′ is the derivative of
+//! a potential and its Lie derivative `cc` is the push-forward of a second derivative: it has
+//! major symmetry, although the factors D, L and l b + b lᵀ do not show it one by one. The
+//! conformance battery (`tests/material_conformance.rs`, check (d)) confirms |cc_ij − cc_ji| ≤
+//! 1e-10 max|cc| at plastic probes, hence `symmetric_tangent() == true`: with the barrier
+//! contact J2 particles get the symmetric factorisation (`model::symmetric_tangent` says why
+//! not with the other contact methods).
 use super::logstrain::exponential_map_update;
 use super::*;
 
@@ -36,7 +52,7 @@ impl ConstitutiveLaw for J2Plastic {
         (self.e, self.nu)
     }
     fn symmetric_tangent(&self) -> bool {
-        false
+        true
     }
     fn update(
         &self,
