@@ -61,7 +61,7 @@ reason = run.get("stop_reason") or s.get("status") or "?"
 steps = run.get("steps") or final.get("step") or 0
 its = run.get("newton_iterations", 0)
 share = final.get("stabilisation_ratio", float("nan"))
-ok = reason in ("solid ratio reached", "jammed")
+ok = reason in ("solid ratio reached", "wall pressure reached", "jammed")
 print(f"{reason[:22]:22s} {final.get('solid_ratio', float('nan')):8.4f} {steps:6d} {its / max(steps, 1):8.1f} "
       f"{run.get('cutbacks', 0):8d} {100 * share:7.2f}% {wall:9.1f} {0 if ok else 1}")
 PY

@@ -825,3 +825,25 @@ fn checkpoint_keys() {
     assert_eq!(e.key, "output.checkpoint_minutes");
     assert_has(&e, &["-1.0", "minutes >= 0"]);
 }
+
+/// `[stop] wall_pressure`: a positive pressure with a wall that moves; anything else names the
+/// key, the value and the expectation. The block sits clear of the walls (x 0–20, walls at
+/// −10 and 30).
+#[test]
+fn stop_wall_pressure_is_checked() {
+    let walls = |velocity: f64| format!("\n[[walls]]\nside = \"left\"\nposition = -10.0\nvelocity = {velocity:?}\n[[walls]]\nside = \"right\"\nposition = 30.0\n");
+    let case = |velocity: f64, p: &str| format!("{BASE}{}\n[stop]\nwall_pressure = {p}\n", walls(velocity));
+    let c = parse(&case(1.0, "250.0")).unwrap();
+    assert_eq!(c.stop.wall_pressure, Some(250.0));
+    assert_eq!(parse(&format!("{BASE}{}", walls(1.0))).unwrap().stop.wall_pressure, None);
+    for (velocity, p, parts) in [
+        (1.0, "-5.0", &["-5.0", "a pressure > 0 (MPa)"][..]),
+        (1.0, "0.0", &["0.0", "a pressure > 0 (MPa)"][..]),
+        (1.0, "nan", &["NaN", "not a finite number"][..]),
+        (0.0, "250.0", &["250.0", "no wall moves", "velocity or a travel"][..]),
+    ] {
+        let e = err_of(&case(velocity, p));
+        assert_eq!(e.key, "stop.wall_pressure", "{e}");
+        assert_has(&e, parts);
+    }
+}

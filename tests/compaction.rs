@@ -4,6 +4,7 @@
 //! - one elasto-plastic disc squeezed between a left and a right wall: the two walls carry the
 //!   same force (equilibrium of the disc, 1e-6 relative), the pressure rises monotonically once
 //!   the disc touches, and the run stops at the target solid ratio;
+//! - the same disc stopped by `[stop] wall_pressure` at the first step that reaches it;
 //! - penalty and augmented Lagrangian agree on the 2 × 2 lateral job.
 //!
 //! The six 2 × 2 jobs themselves (symmetry, stabilisation work, target solid ratio) are run in
@@ -39,6 +40,38 @@ fn single_disc_between_two_walls() {
     let touched: Vec<f64> = reports.iter().map(|r| r.compaction.as_ref().unwrap().pressure[0]).filter(|p| *p > 0.0).collect();
     assert!(touched.len() > 3);
     assert!(touched.windows(2).all(|w| w[1] >= w[0] * 0.999), "pressure must rise: {touched:?}");
+}
+
+/// `[stop] wall_pressure`: the run ends at the first step whose mean pressing-wall pressure
+/// reaches the value, with stop reason "wall pressure reached". The reference is the same run
+/// without the key: the two runs are the same up to that step (bit for bit: nothing else
+/// differs), so the stop must come at exactly the first report of the reference run at or
+/// above the value, chosen as the pressure halfway through the loaded steps.
+#[test]
+fn a_wall_pressure_stops_the_run_at_the_first_step_that_reaches_it() {
+    let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml")
+        .unwrap()
+        .replace("nx = 2", "nx = 1")
+        .replace("ny = 2", "ny = 1")
+        .replace("solid_ratio = 0.95", "solid_ratio = 0.85");
+    let (reference, _) = run(&text);
+    // the left and right walls press in lateral compaction
+    let mean = |r: &StepReport| {
+        let c = r.compaction.as_ref().unwrap();
+        0.5 * (c.pressure[0] + c.pressure[1])
+    };
+    let loaded: Vec<usize> = (0..reference.len()).filter(|&i| mean(&reference[i]) > 0.0).collect();
+    assert!(loaded.len() > 4, "{} loaded steps", loaded.len());
+    let target = mean(&reference[loaded[loaded.len() / 2]]);
+    let first = reference.iter().position(|r| mean(r) >= target).unwrap();
+    assert!(first + 1 < reference.len());
+    let stopped = text.replace("solid_ratio = 0.85", &format!("solid_ratio = 0.85\nwall_pressure = {target:e}"));
+    assert_ne!(stopped, text);
+    let (reports, summary) = run(&stopped);
+    assert_eq!(summary.stop_reason, "wall pressure reached");
+    assert_eq!(reports.len(), first + 1, "stopped after {} steps, expected {}", reports.len(), first + 1);
+    assert!(mean(reports.last().unwrap()) >= target);
+    assert!(reports[..first].iter().all(|r| mean(r) < target));
 }
 
 /// Penalty and augmented Lagrangian give the same wall pressure on the 2 × 2 job, within 2 %

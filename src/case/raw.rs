@@ -164,6 +164,7 @@ pub struct GridRaw {
 #[serde(deny_unknown_fields)]
 pub struct StopRaw {
     pub solid_ratio: Option<f64>,
+    pub wall_pressure: Option<f64>,
     pub jam: Option<bool>,
     pub jam_solid_ratio: Option<f64>,
 }

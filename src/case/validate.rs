@@ -333,10 +333,20 @@ impl Cx<'_> {
             }
         }
         let stop = match r.stop {
-            None => StopSpec { solid_ratio: None, jam: true, jam_solid_ratio: 0.9 },
+            None => StopSpec { solid_ratio: None, wall_pressure: None, jam: true, jam_solid_ratio: 0.9 },
             Some(st) => StopSpec {
                 solid_ratio: match st.solid_ratio {
                     Some(v) => Some(self.num("stop.solid_ratio", v, v > 0.0 && v <= 1.0, "a solid ratio in (0, 1]")?),
+                    None => None,
+                },
+                wall_pressure: match st.wall_pressure {
+                    Some(v) => {
+                        let p = self.num("stop.wall_pressure", v, v > 0.0, "a pressure > 0 (MPa)")?;
+                        if !walls.iter().any(|w| w.velocity != 0.0 || w.travel.as_ref().is_some_and(|(t, _)| *t != 0.0)) {
+                            return Err(self.err("stop.wall_pressure", format!("value {v:?}: no wall moves, so no wall presses; expected a [[walls]] entry with a velocity or a travel")));
+                        }
+                        Some(p)
+                    }
                     None => None,
                 },
                 jam: st.jam.unwrap_or(true),

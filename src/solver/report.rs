@@ -72,7 +72,7 @@ pub struct RunSummary {
     pub n_free: usize,
     pub n_elements: usize,
     pub last: Option<StepReport>,
-    /// Why the run ended: "end time", "solid ratio reached", "jammed", or the reason an
+    /// Why the run ended: "end time", "solid ratio reached", "wall pressure reached", "jammed", or the reason an
     /// observer gave for stopping the run after a step (e.g. "interrupted by SIGTERM").
     pub stop_reason: String,
     /// Whether the run was stopped by its observer before its end (see

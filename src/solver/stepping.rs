@@ -60,6 +60,12 @@ impl Simulation {
                 stop_reason = "solid ratio reached".to_string();
                 break;
             }
+            if let (Some(c), Some(target)) = (&report.compaction, self.model.stop.wall_pressure) {
+                if self.pressing_pressure(c) >= target {
+                    stop_reason = "wall pressure reached".to_string();
+                    break;
+                }
+            }
             if let ControlFlow::Break(reason) = flow {
                 stop_reason = reason;
                 interrupted = true;
@@ -83,6 +89,18 @@ impl Simulation {
             timing: self.clock.timing(),
             partition: self.sys.partition.clone(),
         })
+    }
+
+    /// The mean pressure of the pressing walls (those that move) in `c` (MPa): what
+    /// `[stop] wall_pressure` is compared with, the same mean as the pressure–density curve
+    /// of `summary.json`.
+    pub fn pressing_pressure(&self, c: &Compaction) -> f64 {
+        let walls = &self.model.loading;
+        let sides: Vec<usize> = (0..walls.walls.len()).filter(|&w| walls.wall_moves(w)).map(|w| walls.walls[w].side.index()).collect();
+        if sides.is_empty() {
+            return 0.0;
+        }
+        sides.iter().map(|&s| c.pressure[s]).sum::<f64>() / sides.len() as f64
     }
 
     /// A failed step counts as a jam (the walls cannot advance any more) only when the last
