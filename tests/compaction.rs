@@ -23,13 +23,18 @@ fn run(text: &str) -> (Vec<StepReport>, mpfem::solver::RunSummary) {
     (reports, summary)
 }
 
-#[test]
-fn single_disc_between_two_walls() {
-    let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml")
+/// The lateral 2 × 2 job with one disc, to solid ratio 0.85.
+fn single_disc_job() -> String {
+    std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml")
         .unwrap()
         .replace("nx = 2", "nx = 1")
         .replace("ny = 2", "ny = 1")
-        .replace("solid_ratio = 0.95", "solid_ratio = 0.85");
+        .replace("solid_ratio = 0.95", "solid_ratio = 0.85")
+}
+
+#[test]
+fn single_disc_between_two_walls() {
+    let text = single_disc_job();
     let (reports, summary) = run(&text);
     assert_eq!(summary.stop_reason, "solid ratio reached");
     let last = reports.last().unwrap().compaction.clone().unwrap();
@@ -49,11 +54,7 @@ fn single_disc_between_two_walls() {
 /// above the value, chosen as the pressure halfway through the loaded steps.
 #[test]
 fn a_wall_pressure_stops_the_run_at_the_first_step_that_reaches_it() {
-    let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml")
-        .unwrap()
-        .replace("nx = 2", "nx = 1")
-        .replace("ny = 2", "ny = 1")
-        .replace("solid_ratio = 0.95", "solid_ratio = 0.85");
+    let text = single_disc_job();
     let (reference, _) = run(&text);
     // the left and right walls press in lateral compaction
     let mean = |r: &StepReport| {

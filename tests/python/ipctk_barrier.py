@@ -15,6 +15,11 @@ import ipctk
 
 
 def main(src, dst):
+    # One thread: `can_collide` below is a Python function, and ipctk's broad phase calls it
+    # from its worker threads. With several threads the workers wait for the interpreter's
+    # lock while the main thread holds it inside ipctk, and the process hangs (seen in a
+    # fresh-clone CI run: three threads waiting on futexes for minutes).
+    ipctk.set_num_threads(1)
     with open(src) as f:
         case = json.load(f)
     V = np.asfortranarray(np.array(case["vertices"], dtype=float))
