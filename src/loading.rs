@@ -199,6 +199,11 @@ impl Loading {
         (point, side.inward_normal())
     }
 
+    /// The sides (`WallSide::index`) of the pressing walls, those that move.
+    pub fn pressing_sides(&self) -> Vec<usize> {
+        (0..self.walls.len()).filter(|&w| self.wall_moves(w)).map(|w| self.walls[w].side.index()).collect()
+    }
+
     /// Whether wall `w` moves at all during the run (a pressing wall).
     pub fn wall_moves(&self, w: usize) -> bool {
         match self.walls[w].travel {

@@ -494,8 +494,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let restarts = earlier.restarts.clone();
     // the pressure–density curve for the compaction-law fits: the mean pressure of the moving
     // walls (of every loaded wall when none moves)
-    let loading = &sim.model.loading;
-    let pressing: Vec<usize> = loading.walls.iter().enumerate().filter(|&(w, _)| loading.wall_moves(w)).map(|(_, wall)| wall.side.index()).collect();
+    let pressing = sim.model.loading.pressing_sides();
     let mut curve: Vec<CurvePoint> = std::mem::take(&mut earlier.curve);
     // checkpoints: every `checkpoint_every` steps, every `checkpoint_minutes`, and after the
     // step in which the stop flag was set

@@ -95,8 +95,7 @@ impl Simulation {
     /// `[stop] wall_pressure` is compared with, the same mean as the pressure–density curve
     /// of `summary.json`.
     pub fn pressing_pressure(&self, c: &Compaction) -> f64 {
-        let walls = &self.model.loading;
-        let sides: Vec<usize> = (0..walls.walls.len()).filter(|&w| walls.wall_moves(w)).map(|w| walls.walls[w].side.index()).collect();
+        let sides = self.model.loading.pressing_sides();
         if sides.is_empty() {
             return 0.0;
         }
