@@ -55,6 +55,13 @@ pub struct BarrierEval {
 }
 
 impl BarrierEval {
+    /// The slope of the barrier energy along a change `du` of the global dofs: ∇E·du.
+    pub fn slope(&self, du: &[f64]) -> f64 {
+        let edges: f64 = self.edges.iter().map(|e| e.dofs.iter().zip(&e.term.grad).map(|(&d, g)| g * du[d]).sum::<f64>()).sum();
+        let walls: f64 = self.walls.iter().map(|w| w.term.grad[0] * du[2 * w.node] + w.term.grad[1] * du[2 * w.node + 1]).sum();
+        edges + walls
+    }
+
     /// Add the barrier gradient (its contribution to the internal force, N/mm) to `f`
     /// (global dofs).
     pub fn add_gradient(&self, f: &mut [f64]) {

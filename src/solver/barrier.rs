@@ -219,6 +219,23 @@ impl Simulation {
         Ok(())
     }
 
+    /// The part of the incremental potential the contact knows in closed form at `u` (the
+    /// barrier's energy at its last evaluation, which must be at `u`, and the lagged
+    /// friction's) and its slope along `du` (every dof): for the line search, which takes
+    /// their change exactly ([`super::newton`]). `None` without the barrier.
+    pub(super) fn contact_potential(&self, u: &[f64], du: &[f64]) -> Option<(f64, f64)> {
+        let b = self.barrier.as_ref()?;
+        let (mut energy, mut slope) = (b.eval.energy, b.eval.slope(du));
+        let eps = FRICTION_EPS * b.h_min;
+        for fp in &b.friction {
+            let t = fp.term(u, &self.sol.u, eps);
+            let width = if fp.segment.is_some() { 6 } else { 2 };
+            energy += t.energy;
+            slope += (0..width).map(|i| t.grad[i] * du[fp.dofs[i]]).sum::<f64>();
+        }
+        Some((energy, slope))
+    }
+
     /// Add the barrier terms of the last evaluation to the internal force and (on the process
     /// that holds the tangent) the tangent; their statistics become the contact statistics.
     pub(super) fn add_barrier(&mut self, u: &[f64], tangent: bool) {

@@ -16,18 +16,38 @@ const WOLFE_CURVATURE: f64 = 0.9;
 /// The sufficient-decrease constant c₁ of the barrier's line search (Armijo).
 const ARMIJO: f64 = 1e-4;
 
+/// The contact's part E_c of the incremental potential (the barrier and the lagged friction)
+/// and its slope ∇E_c·Δu at the start of a line search (`energy0`, `slope0`) and at the step
+/// tried. The trapezoidal rule is exact for a quadratic only; the barrier's Hessian jumps
+/// where a closest point passes an edge's end and grows like 1/d² towards contact, and the
+/// friction's is μλ/ε_v in stick and zero in slip, so across such a change its estimate can
+/// call an ascent a descent. Both energies are known in closed form, so the line search
+/// takes their change exactly.
+#[derive(Clone, Copy, Debug)]
+struct BarrierLine {
+    energy0: f64,
+    slope0: f64,
+    energy: f64,
+    slope: f64,
+}
+
 /// Whether a step η along a Newton update decreases the incremental potential Π enough (the
 /// barrier's line search once the walls have arrived): with g0 = −Π′(0) = R(u₀)·Δu and
 /// `slope` = −Π′(η) = R(u₀ + ηΔu)·Δu (R = −∇Π), Armijo's sufficient decrease on the change of
-/// Π estimated by the trapezoidal rule, −½η(g0 + slope) ≤ −c₁ η g0, and the far side of the
+/// Π estimated by the trapezoidal rule, −½η(g0 + slope) ≤ −c₁ η g0 (with `barrier`, the
+/// barrier's part of Π exactly and the rest by the trapezoidal rule), and the far side of the
 /// strong Wolfe curvature condition, −slope ≤ c₂ g0. The curvature condition rejects a step
 /// that lands as steeply uphill as it left, an overshoot across a valley which the trapezoidal
 /// estimate rates as no change at all: accepting it let Newton jump back and forth between
 /// the valley's sides where the Hessian jumps (a node passing an edge's end, a friction pair
 /// between stick and slip), a cycle of period two that held the residual at 1e-3 for 20
 /// iterations (robustness case 02, measured).
-fn barrier_descent(eta: f64, g0: f64, slope: f64) -> bool {
-    let change = -0.5 * eta * (g0 + slope);
+fn barrier_descent(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>) -> bool {
+    let change = match barrier {
+        // the barrier's own change exactly, the trapezoidal rule on the rest only
+        Some(b) => (b.energy - b.energy0) - 0.5 * eta * ((g0 + b.slope0) + (slope + b.slope)),
+        None => -0.5 * eta * (g0 + slope),
+    };
     g0 > 0.0 && change <= -ARMIJO * eta * g0 && slope >= -WOLFE_CURVATURE * g0
 }
 
@@ -236,6 +256,8 @@ impl Simulation {
                 }
                 None => (1.0, 1.0, 6),
             };
+            // the barrier's energy and slope along the update at its start
+            let line0 = self.contact_potential(&u0, &du_full);
             let mut eta = eta_max;
             // the smallest step accepted anyway, and the one below which an evaluation that
             // fails fails the solve (the barrier backs off further)
@@ -262,7 +284,8 @@ impl Simulation {
                         let better = rn.is_finite()
                             && if barrier {
                                 let slope: f64 = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum();
-                                alpha0 < 1.0 || rn <= r_old || barrier_descent(eta, g0, slope)
+                                let line = line0.zip(self.contact_potential(u, &du_full)).map(|((energy0, slope0), (energy, slope))| BarrierLine { energy0, slope0, energy, slope });
+                                alpha0 < 1.0 || rn <= r_old || barrier_descent(eta, g0, slope, line)
                             } else {
                                 rn < r_old || s < 0.9 * energy
                             };
@@ -385,7 +408,7 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use super::barrier_descent;
+    use super::{barrier_descent, BarrierLine};
 
     /// Π(η) = ½ c (η − η*)² along a Newton update whose curvature is off (η* the true
     /// minimiser): −Π′(η) = c (η* − η), g0 = c η*. Closed form, exact to round-off.
@@ -398,26 +421,41 @@ mod tests {
         let (c, eta_star) = (3.0, 0.5);
         let g0 = slope(c, eta_star, 0.0);
         // η = 1 lands on the far side as steep as it left: Π(1) = Π(0), no decrease
-        assert!(!barrier_descent(1.0, g0, slope(c, eta_star, 1.0)));
+        assert!(!barrier_descent(1.0, g0, slope(c, eta_star, 1.0), None));
         // the backtracked η = 1/2 is the minimiser
-        assert!(barrier_descent(0.5, g0, slope(c, eta_star, 0.5)));
+        assert!(barrier_descent(0.5, g0, slope(c, eta_star, 0.5), None));
+    }
+
+    #[test]
+    fn a_barrier_rise_the_trapezoidal_rule_misses_is_rejected() {
+        // Π = E_b + Π_nb along the update, Π_nb = −η (R_nb·Δu = 1 everywhere) and E_b the
+        // smooth step 1.5(3η² − 2η³) (flat at both ends): Π(1) − Π(0) = 1.5 − 1 = +0.5, an
+        // ascent. The trapezoidal rule on Π's slope alone (1 at both ends) sees −1.
+        let g0 = 1.0;
+        let slope = 1.0;
+        assert!(barrier_descent(1.0, g0, slope, None));
+        let line = BarrierLine { energy0: 0.0, slope0: 0.0, energy: 1.5, slope: 0.0 };
+        assert!(!barrier_descent(1.0, g0, slope, Some(line)));
+        // a rise of 0.9 leaves a decrease of 0.1, which passes Armijo's test
+        let line = BarrierLine { energy: 0.9, ..line };
+        assert!(barrier_descent(1.0, g0, slope, Some(line)));
     }
 
     #[test]
     fn a_short_step_downhill_is_accepted_and_an_ascent_is_not() {
         let (c, eta_star) = (2.0, 4.0);
         let g0 = slope(c, eta_star, 0.0);
-        assert!(barrier_descent(1.0, g0, slope(c, eta_star, 1.0)));
+        assert!(barrier_descent(1.0, g0, slope(c, eta_star, 1.0), None));
         // a direction uphill (g0 < 0) is never a descent
-        assert!(!barrier_descent(1.0, -g0, -slope(c, eta_star, 1.0)));
+        assert!(!barrier_descent(1.0, -g0, -slope(c, eta_star, 1.0), None));
         // an overshoot that still lowers Π but lands steeper than c₂ g0 uphill is rejected:
         // η* = 0.45, η = 1: −Π′(1) = −0.55 against g0 = 0.45, a ratio of −1.22
         let (c, eta_star) = (1.0, 0.45);
         let g0 = slope(c, eta_star, 0.0);
-        assert!(!barrier_descent(1.0, g0, slope(c, eta_star, 1.0)));
+        assert!(!barrier_descent(1.0, g0, slope(c, eta_star, 1.0), None));
         // and one that lands at 0.8 of the start's slope uphill is accepted: η* = 1/1.8
         let eta_star = 1.0 / 1.8;
         let g0 = slope(c, eta_star, 0.0);
-        assert!(barrier_descent(1.0, g0, slope(c, eta_star, 1.0)));
+        assert!(barrier_descent(1.0, g0, slope(c, eta_star, 1.0), None));
     }
 }
