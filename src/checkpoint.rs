@@ -17,7 +17,8 @@
 //! - `/meshes/NNNNNN` per body: `nodes` (n × 2, mm, the mesh's reference coordinates),
 //!   `elements` (n × 4, u64), `boundary` (n × 2, u64) and `edge_sets/NAME` (n × 2, u64);
 //! - `scalars` (u8): CBOR of [`crate::solver::SimScalars`] (counters, energies, next step size,
-//!   timing, contact pair histories, the last step's report);
+//!   timing, contact pair histories, the barrier contact's κ, smallest distance and ties, the
+//!   last step's report);
 //! - `run` (u8): CBOR of the caller's record ([`Checkpoint::run_state`]).
 //!
 //! The file is written as `checkpoint.h5.tmp`, flushed and synced to disk, then renamed over

@@ -111,7 +111,7 @@ impl FrictionPair {
 /// after each converged solve until |g| is below the tolerance (Uzawa). The offset is fixed in
 /// the global frame: a tie is made within d̂ (a few thousandths of an element), so a rotation
 /// θ of the pair moves its ends by at most d̂ θ against each other.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Tie {
     pub node: usize,
     pub segment: usize,

@@ -21,6 +21,7 @@
 //! and grows (incrementally, [`crate::assembly::Assembler::set_terms`]) when an iterate brings
 //! a pair within d̂ that it does not hold; wall pairs use the nodes' own diagonal blocks.
 
+use super::state::BarrierState;
 use super::{NewtonFailure, Phase, Simulation};
 use crate::assembly::FIXED;
 use crate::contact::barrier_problem::{BarrierContact, BarrierEval, FrictionPair};
@@ -129,6 +130,11 @@ impl BarrierRun {
             .collect()
     }
 
+    /// The state a checkpoint keeps ([`BarrierState`]).
+    pub fn state(&self) -> BarrierState {
+        BarrierState { kappa: self.contact.kappa, min_distance: self.min_distance, ties: self.contact.ties.clone(), tied: self.contact.tied.clone() }
+    }
+
     /// Whether any contact has friction.
     pub fn has_friction(&self) -> bool {
         self.mu > 0.0 || self.mu_walls.iter().any(|&m| m > 0.0)
@@ -184,7 +190,12 @@ impl Simulation {
         b.tie_gap = f64::INFINITY;
         let near = b.contact.candidates(&x_n, reach);
         let pairs = b.with_ties(near);
-        // the friction of this step, lagged at the converged state (its last evaluation)
+        // the barrier at the converged state, with κ as the last commit left it: the friction
+        // of this step is lagged there, and the springs' directions are chosen from it (the
+        // last evaluation is not that state after a failed attempt: its friction pairs could
+        // lie outside the pattern)
+        let walls_n = b.walls0.clone();
+        b.contact.evaluate(&x_n, &walls_n, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()))?;
         b.friction = if b.has_friction() { b.eval.friction_pairs(&b.contact, &x_n, &b.walls0, b.mu, &b.mu_walls) } else { Vec::new() };
         self.set_barrier_pattern(pairs)?;
         // the springs of this step: every dof, or only the directions the barrier pairs of the
@@ -406,6 +417,31 @@ impl Simulation {
             t.lambda[1] += k * g[1];
         }
         true
+    }
+
+    /// Continue the barrier from a checkpoint's `state`, the committed solution already in
+    /// place: κ, the smallest distance and the ties as they were, and the barrier evaluated
+    /// again at the converged configuration with the walls where they are (as the step that
+    /// converged there left it).
+    pub(super) fn restore_barrier(&mut self, state: BarrierState) -> Result<(), String> {
+        let n_nodes = self.model.x0.len();
+        let n_segments = self.barrier.as_ref().map_or(0, |b| b.contact.segments.len());
+        if let Some(t) = state.ties.iter().find(|t| t.node >= n_nodes || t.segment >= n_segments) {
+            return Err(format!("barrier ties: node {} or edge {} is not in the model ({n_nodes} nodes, {n_segments} boundary edges)", t.node, t.segment));
+        }
+        let x = self.coords(&self.sol.u);
+        let walls = self.model.wall_planes(self.sol.time);
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
+        b.contact.kappa = state.kappa;
+        b.min_distance = state.min_distance;
+        b.contact.ties = state.ties;
+        b.contact.tied = state.tied;
+        b.update_tie_floor();
+        b.walls0.clone_from(&walls);
+        b.walls1 = walls;
+        b.alpha = 1.0;
+        let walls = b.walls_at(1.0);
+        b.contact.evaluate(&x, &walls, PROJECT, &mut b.eval).map_err(|e| format!("barrier at the checkpoint's state: {e}"))
     }
 
     /// Whether the walls have arrived at their end-of-step positions (always without the

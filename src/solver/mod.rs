@@ -38,7 +38,7 @@ mod system;
 
 pub use params::{NewtonKind, SolverSpec, TimeSpec};
 pub use report::{Clock, Compaction, Phase, PhaseScope, RunSummary, StepReport, Timing};
-pub use state::{PartitionTotals, RunState, SimScalars, SimState, Solution};
+pub use state::{BarrierState, PartitionTotals, RunState, SimScalars, SimState, Solution};
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
 use crate::comm::{Collective, Serial};
@@ -349,6 +349,7 @@ impl Simulation {
                 stab_energy: self.springs.energy,
                 timing: self.clock.timing(),
                 contact: self.contact.as_ref().map(|c| c.state()),
+                barrier: self.barrier.as_ref().map(|b| b.state()),
                 partition: PartitionTotals { repartitions: self.sys.partition.repartitions, kept: self.sys.partition.kept, moved: self.sys.partition.moved, time_s: self.sys.partition.time_s },
             },
             sol: self.sol.clone(),
@@ -407,6 +408,12 @@ impl Simulation {
         self.sys.partition.kept = s.partition.kept;
         self.sys.partition.moved = s.partition.moved;
         self.sys.partition.time_s += s.partition.time_s;
+        match (self.barrier.is_some(), s.barrier) {
+            (true, Some(bs)) => self.restore_barrier(bs)?,
+            (false, None) => {}
+            (true, None) => return Err("contact: the model has the barrier contact, the checkpoint has no barrier state (it was written by another contact method or an older mpfem)".into()),
+            (false, Some(_)) => return Err("contact: the checkpoint has a barrier contact state, the model has no barrier contact".into()),
+        }
         Ok(())
     }
 

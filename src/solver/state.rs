@@ -40,6 +40,22 @@ pub struct SimScalars {
     #[serde(default)]
     pub partition: PartitionTotals,
     pub contact: Option<crate::contact::ContactState>,
+    /// The barrier contact's state (absent from older checkpoints and without the barrier).
+    #[serde(default)]
+    pub barrier: Option<BarrierState>,
+}
+
+/// What of the barrier contact changes over a run and is not rebuilt from the model: κ after
+/// its doublings, the smallest distance of the last converged step (the next doubling
+/// compares with it), and the ties of cohering particles with their multipliers. The last
+/// evaluation of the barrier, from which the next step lags its friction and picks the
+/// springs' directions, is recomputed at the converged state on a restart.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BarrierState {
+    pub kappa: f64,
+    pub min_distance: f64,
+    pub ties: Vec<crate::contact::barrier_problem::Tie>,
+    pub tied: Vec<(usize, usize)>,
 }
 
 /// The state of a simulation between two steps that is not rebuilt from its model
