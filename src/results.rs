@@ -22,7 +22,11 @@
 //!   `contact_status` (n_nodes, i32: 0 open, 1 sliding, 2 sticking, 3 tied), `contact_force`
 //!   (n_nodes × 3, N/mm: the force the contacts exert on the node) and `wall_force`
 //!   (n_nodes × 4, N/mm: the normal force the node exerts on the left, right, bottom and top
-//!   wall; its column sums are `f_left` … `f_top` of the history);
+//!   wall; its column sums are `f_left` … `f_top` of the history). With the barrier contact
+//!   (`crate::solver::Simulation::nodal_contact`): the pressure is the size of the barrier's
+//!   force on the node over its tributary boundary length, the gap the distance the barrier
+//!   acts on (positive; NaN beyond d̂), the status 0 / 1 / 2 / 3 as above (sticking: a slip
+//!   of the step below ε_v), the force that of the barrier, the friction and the ties;
 //! - when the model has walls: `wall_points` (2 n_walls × 2, f64, mm) and `wall_cells`
 //!   (n_walls × 2, i64): each wall as a line segment at its current position, spanning the
 //!   two walls across it (or the particles' extent when one of those is missing), and

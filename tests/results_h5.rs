@@ -385,3 +385,66 @@ fn killed_run_leaves_a_readable_results_file() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The barrier contact writes the same node fields (`Simulation::barrier_nodal`): the coarse
+/// 2 × 2 discs with the barrier and friction μ = 0.2 between the discs (frictionless walls),
+/// to solid ratio 0.85, every step. At every output step: a node has a gap (a pair within d̂)
+/// only where the barrier pushes it, and every gap is positive (no crossing); statuses are
+/// 0 / 1 / 2 and a node with a pressure has a status; the nodal wall forces add up to the
+/// history's wall forces (1e-8 relative: the same terms summed in another order); and the
+/// contact forces on all nodes (barrier and friction) add up to the walls' push on the
+/// particles (1e-8 of the largest wall force: the particles' forces on each other cancel,
+/// Newton's third law, and the walls are frictionless). Some nodes stick at some step.
+#[test]
+fn barrier_run_writes_contact_fields_matching_the_history() {
+    let dir = tmpdir("barrier_fields");
+    let case = CASE
+        .replace("method = \"penalty\"\ncontact = \"sliding\"", "method = \"barrier\"\ncontact = \"rubbing\"\nfriction = 0.2")
+        .replace("solid_ratio = 0.74", "solid_ratio = 0.85")
+        .replace("every = 2", "every = 1");
+    assert!(case.contains("friction = 0.2") && case.contains("solid_ratio = 0.85"));
+    let out = run_quiet(&dir, &case);
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let file = mpfem::h5::open(&out.join("results.h5")).unwrap();
+    let steps = file.group("steps").unwrap();
+    let names = steps.member_names().unwrap();
+    assert_eq!(names.len(), rows.len(), "one output step per step");
+    let (mut sticking, mut touching) = (0, 0);
+    for (name, row) in names.iter().zip(&rows) {
+        let g = steps.group(name).unwrap();
+        let nn = g.dataset("coordinates").unwrap().shape()[0];
+        let p: Vec<f64> = g.dataset("contact_pressure").unwrap().read_raw().unwrap();
+        let gap: Vec<f64> = g.dataset("contact_gap").unwrap().read_raw().unwrap();
+        let status: Vec<i32> = g.dataset("contact_status").unwrap().read_raw().unwrap();
+        let force: Vec<f64> = g.dataset("contact_force").unwrap().read_raw().unwrap();
+        let wall: Vec<f64> = g.dataset("wall_force").unwrap().read_raw().unwrap();
+        assert_eq!((p.len(), gap.len(), status.len(), force.len(), wall.len()), (nn, nn, nn, 3 * nn, 4 * nn));
+        for n in 0..nn {
+            assert!((0..=2).contains(&status[n]), "step {name}: status {} at node {n}", status[n]);
+            assert!(p[n] >= 0.0 && p[n].is_finite(), "step {name}: pressure {} at node {n}", p[n]);
+            assert_eq!(p[n] > 0.0, status[n] > 0, "step {name} node {n}: pressure {} status {}", p[n], status[n]);
+            if gap[n].is_finite() {
+                assert!(gap[n] > 0.0, "step {name} node {n}: gap {}", gap[n]);
+                assert!(status[n] > 0, "step {name} node {n}: a pair within d̂ without force");
+            }
+        }
+        sticking += status.iter().filter(|&&s| s == 2).count();
+        touching += status.iter().filter(|&&s| s > 0).count();
+        let f_hist: Vec<f64> = ["f_left", "f_right", "f_bottom", "f_top"].iter().map(|c| row[col(c)]).collect();
+        let scale = f_hist.iter().fold(0.0f64, |a, f| a.max(f.abs()));
+        for k in 0..4 {
+            let sum: f64 = (0..nn).map(|n| wall[4 * n + k]).sum();
+            assert!((sum - f_hist[k]).abs() <= 1e-8 * f_hist[k].abs().max(1e-300) || sum == f_hist[k], "step {name} wall {k}: nodal sum {sum} vs history {}", f_hist[k]);
+        }
+        let fx: f64 = (0..nn).map(|n| force[3 * n]).sum();
+        let fy: f64 = (0..nn).map(|n| force[3 * n + 1]).sum();
+        assert!((fx - (f_hist[0] - f_hist[1])).abs() <= 1e-8 * scale, "step {name}: Σ contact fx {fx} vs {}", f_hist[0] - f_hist[1]);
+        assert!((fy - (f_hist[2] - f_hist[3])).abs() <= 1e-8 * scale, "step {name}: Σ contact fy {fy} vs {}", f_hist[2] - f_hist[3]);
+    }
+    assert!(touching > 0 && sticking > 0, "{touching} nodes in contact, {sticking} sticking over the run");
+    let _ = std::fs::remove_dir_all(&dir);
+}

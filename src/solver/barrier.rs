@@ -25,7 +25,8 @@ use super::state::BarrierState;
 use super::{NewtonFailure, Phase, Simulation};
 use crate::assembly::FIXED;
 use crate::contact::barrier_problem::{BarrierContact, BarrierEval, FrictionPair};
-use crate::contact::{ContactStats, Wall};
+use crate::contact::geometry::unit;
+use crate::contact::{ContactStats, NodalContact, Wall};
 
 /// Whether the pair Hessians are projected onto the PSD matrices.
 const PROJECT: bool = false;
@@ -70,6 +71,9 @@ pub(super) struct BarrierRun {
     /// Forces below this are round-off: 1e-13 K L with K the largest shear modulus or bulk
     /// penalty (incompressible particles) and L the square root of the particles' area (N/mm).
     pub stiffness_floor: f64,
+    /// The contact state per node of the last converged step, for the results files
+    /// ([`Simulation::barrier_nodal`]).
+    pub nodal: NodalContact,
 }
 
 /// The stiffness of a tie relative to the softest particle's Young's modulus: k = 100 E
@@ -99,7 +103,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0 }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default() }
     }
 
     /// The round-off of the ties' forces, after ties were made.
@@ -419,6 +423,87 @@ impl Simulation {
         true
     }
 
+    /// The contact state per node of the converged displacements `u` of a step (from the
+    /// barrier's last evaluation, there, and the step's lagged friction and ties), for the
+    /// results files:
+    /// - `force`: the force of the barrier, the friction and the ties on the node (N/mm), as
+    ///   the node of a pair or an end of its edge;
+    /// - `pressure`: the size of the barrier's force on the node over its tributary boundary
+    ///   length (half of each adjacent boundary edge, current configuration; MPa), so that
+    ///   Σ pressure × length is the normal force the node carries;
+    /// - `gap`: the smallest distance the barrier acts on at the node, to an edge of another
+    ///   particle or to a wall's barrier plane (which lies the wall offset behind the wall);
+    ///   NaN beyond d̂ (mm, never negative);
+    /// - `status`: 0 no force, 1 sliding (frictionless, or a slip of the step beyond ε_v),
+    ///   2 sticking (a slip below ε_v), 3 tied;
+    /// - `wall_force`: the normal force the node exerts on each wall (N/mm); summed over the
+    ///   nodes, the history's wall forces.
+    pub(super) fn barrier_nodal(&self, u: &[f64]) -> NodalContact {
+        let n_nodes = self.model.x0.len();
+        let Some(b) = self.barrier.as_ref() else { return NodalContact::default() };
+        let x = self.coords(u);
+        let walls = b.walls_at(b.alpha);
+        let mut out = NodalContact { pressure: vec![0.0; n_nodes], gap: vec![f64::NAN; n_nodes], status: vec![0; n_nodes], force: vec![[0.0; 2]; n_nodes], wall_force: vec![vec![0.0; n_nodes]; walls.len()] };
+        let mut normal = vec![[0.0f64; 2]; n_nodes];
+        let gap = |g: &mut Vec<f64>, n: usize, d: f64| {
+            if !(g[n] <= d) {
+                g[n] = d;
+            }
+        };
+        for e in &b.eval.edges {
+            let [a, c] = b.contact.segments[e.segment].nodes;
+            for (i, n) in [e.node, a, c].into_iter().enumerate() {
+                normal[n][0] -= e.term.grad[2 * i];
+                normal[n][1] -= e.term.grad[2 * i + 1];
+            }
+            gap(&mut out.gap, e.node, e.distance);
+        }
+        for w in &b.eval.walls {
+            normal[w.node][0] -= w.term.grad[0];
+            normal[w.node][1] -= w.term.grad[1];
+            let n = unit(walls[w.wall].normal);
+            out.wall_force[w.wall][w.node] -= w.term.grad[0] * n[0] + w.term.grad[1] * n[1];
+            gap(&mut out.gap, w.node, w.distance);
+        }
+        let mut length = vec![0.0; n_nodes];
+        for s in &b.contact.segments {
+            let [a, c] = s.nodes;
+            let l = (x[c][0] - x[a][0]).hypot(x[c][1] - x[a][1]);
+            length[a] += 0.5 * l;
+            length[c] += 0.5 * l;
+        }
+        for n in 0..n_nodes {
+            let f = normal[n][0].hypot(normal[n][1]);
+            if f > 0.0 {
+                out.status[n] = 1;
+                if length[n] > 0.0 {
+                    out.pressure[n] = f / length[n];
+                }
+            }
+            out.force[n] = normal[n];
+        }
+        let eps = FRICTION_EPS * b.h_min;
+        for fp in &b.friction {
+            let t = fp.term(u, &self.sol.u, eps);
+            let width = if fp.segment.is_some() { 6 } else { 2 };
+            for i in 0..width {
+                out.force[fp.dofs[i] / 2][fp.dofs[i] % 2] -= t.grad[i];
+            }
+            let slip: f64 = (0..width).map(|i| fp.w[i] * (u[fp.dofs[i]] - self.sol.u[fp.dofs[i]])).sum();
+            if fp.mu_lambda > 0.0 && slip.abs() < eps && out.status[fp.node] > 0 {
+                out.status[fp.node] = out.status[fp.node].max(2);
+            }
+        }
+        for tie in &b.contact.ties {
+            let t = tie.term(&x, &b.contact.segments, b.tie_stiffness);
+            for i in 0..6 {
+                out.force[tie.dofs[i] / 2][tie.dofs[i] % 2] -= t.grad[i];
+            }
+            out.status[tie.node] = 3;
+        }
+        out
+    }
+
     /// Continue the barrier from a checkpoint's `state`, the committed solution already in
     /// place: κ, the smallest distance and the ties as they were, and the barrier evaluated
     /// again at the converged configuration with the walls where they are (as the step that
@@ -458,6 +543,10 @@ impl Simulation {
     pub(super) fn commit_barrier(&mut self, u: &[f64]) {
         if self.barrier.is_none() {
             return;
+        }
+        let nodal = self.barrier_nodal(u);
+        if let Some(b) = self.barrier.as_mut() {
+            b.nodal = nodal;
         }
         let x = self.coords(u);
         let Some(b) = self.barrier.as_mut() else { return };

@@ -512,7 +512,11 @@ impl Simulation {
 
     /// Contact state per node of the last committed step (None without contact).
     pub fn nodal_contact(&self) -> Option<&crate::contact::NodalContact> {
-        self.contact.as_ref().map(|c| &c.nodal)
+        match (&self.contact, &self.barrier) {
+            (Some(c), _) => Some(&c.nodal),
+            (None, Some(b)) => Some(&b.nodal),
+            (None, None) => None,
+        }
     }
 
     /// Current nodal coordinates x = X + u.
