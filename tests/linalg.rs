@@ -321,6 +321,34 @@ fn cholesky_on_indefinite_symmetric_matrix_uses_ldlt_or_reports_singular() {
     }
 }
 
+/// `LinearSolver::definite` (what the barrier's Newton uses to decide on shifting an
+/// indefinite tangent): a Cholesky factorisation of the Laplacian (eigenvalues > 0) reports
+/// positive definite; of the shifted Laplacian above (eigenvalues on both sides of 0), not;
+/// LU and PCG cannot tell; nothing is reported before a factorisation.
+#[test]
+fn cholesky_reports_whether_the_matrix_is_definite() {
+    let spd = laplacian(20);
+    let indefinite = conv_diff(30, 0.0, 0.0, 1.2345);
+    for structure in [FactorStructure::Simplicial, FactorStructure::Supernodal] {
+        let mut s = FaerCholesky::new(1).with_structure(structure);
+        assert_eq!(s.definite(), None, "before any factorisation");
+        s.analyze(&spd).unwrap();
+        s.factor(&spd).unwrap();
+        assert_eq!(s.definite(), Some(true), "Laplacian, {structure:?}");
+        s.analyze(&indefinite).unwrap();
+        if s.factor(&indefinite).is_ok() {
+            assert_eq!(s.definite(), Some(false), "shifted Laplacian, {structure:?}");
+        }
+    }
+    let mut lu = FaerLu::new(1);
+    lu.factor(&spd).unwrap();
+    assert_eq!(lu.definite(), None);
+    let mut pcg = Pcg::new(Preconditioner::Jacobi, 1e-10, 2000);
+    pcg.analyze(&spd).unwrap();
+    pcg.factor(&spd).unwrap();
+    assert_eq!(pcg.definite(), None);
+}
+
 #[test]
 fn cholesky_on_saddle_point_matrix_does_not_panic() {
     // [[K, Bᵀ], [B, 0]]: zero diagonal block, needs pivoting. Either a correct answer or Singular.

@@ -313,6 +313,11 @@ trait Factorisation {
     fn factor(&mut self, a: &CsrMatrix, n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError>;
     /// Overwrite `rhs` with A⁻¹·rhs (after a successful `factor`).
     fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack);
+    /// Whether the last factorisation found the matrix positive definite (None: it cannot
+    /// tell).
+    fn definite(&self) -> Option<bool> {
+        None
+    }
 }
 
 /// A faer sparse direct solver: the factorisation `F` ([`LuFactors`] or [`CholeskyFactors`])
@@ -444,6 +449,14 @@ impl<F: Factorisation + Send> LinearSolver for FaerDirect<F> {
 
     fn name(&self) -> &'static str {
         F::NAME
+    }
+
+    fn definite(&self) -> Option<bool> {
+        if self.factored {
+            self.fact.definite()
+        } else {
+            None
+        }
     }
 }
 
@@ -709,6 +722,10 @@ impl Factorisation for CholeskyFactors {
                  across supernodes — use the LU solver"
             ))),
         }
+    }
+
+    fn definite(&self) -> Option<bool> {
+        self.kind.map(|k| k == CholeskyKind::Llt)
     }
 
     fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {

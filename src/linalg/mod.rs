@@ -119,6 +119,12 @@ pub trait LinearSolver: Send {
     /// Solve with the last factorisation. For PCG `x` is the initial guess on entry.
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError>;
     fn name(&self) -> &'static str;
+    /// Whether the last factorisation found the matrix positive definite (a Cholesky
+    /// factorisation that did not fall back to an indefinite one); None when the solver cannot
+    /// tell (LU, iterative solvers).
+    fn definite(&self) -> Option<bool> {
+        None
+    }
 }
 
 /// `a` is square and its CSR arrays are consistent (what every `analyze` checks first).

@@ -161,7 +161,7 @@ impl Simulation {
         if n_free == 0 {
             return Ok((0, 0.0));
         }
-        self.factor()?;
+        self.factor_descent()?;
         let mut e0 = 0.0;
         let mut e_last = f64::INFINITY;
         let mut du_full = vec![0.0; u.len()];
@@ -309,7 +309,7 @@ impl Simulation {
                 rnorm = self.evaluate(u, inc, vol, full)?;
             }
             if full {
-                self.factor()?;
+                self.factor_descent()?;
             }
         }
         Err(NewtonFailure::NotConverged { iterations: self.spec.max_iterations, residuals })

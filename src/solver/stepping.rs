@@ -149,14 +149,28 @@ impl Simulation {
                     }
                 }
             }
+            let descent_retry = self.barrier.as_ref().is_some_and(|b| !b.descent) && !matches!(result, Err(NewtonFailure::Element(_)));
             match result {
                 Ok(trial) => {
                     self.springs.all = false;
                     self.springs.viscous = false;
+                    if let Some(b) = self.barrier.as_mut() {
+                        b.descent = false;
+                    }
                     let mut report = self.commit(dt_try, trial, cutbacks);
                     remeshes += self.remesh_after_step();
                     report.remeshes = remeshes;
                     return Ok(report);
+                }
+                Err(cause) if descent_retry => {
+                    // with the barrier, retry the same step with the indefinite tangents
+                    // shifted to positive definite ones before cutting back
+                    tracing::debug!(time = self.sol.time, dt = dt_try, %cause, "step failed, retrying with definite tangents");
+                    if let Some(b) = self.barrier.as_mut() {
+                        b.descent = true;
+                    }
+                    cutbacks += 1;
+                    self.run.total_cutbacks += 1;
                 }
                 Err(cause) if partial => {
                     // retry the same step with every dof stabilised before cutting back
