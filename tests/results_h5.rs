@@ -221,6 +221,20 @@ fn check_summary(out: &Path, case: &Path) {
     assert!((pct - 100.0).abs() < 1e-6, "shares add up to {pct} %");
 }
 
+/// The contact node fields of an output step, their shapes checked: (nodes, pressure, gap,
+/// status, force (n × 3), wall force (n × 4)).
+#[allow(clippy::type_complexity)]
+fn contact_fields(g: &hdf5::Group) -> (usize, Vec<f64>, Vec<f64>, Vec<i32>, Vec<f64>, Vec<f64>) {
+    let nn = g.dataset("coordinates").unwrap().shape()[0];
+    let p: Vec<f64> = g.dataset("contact_pressure").unwrap().read_raw().unwrap();
+    let gap: Vec<f64> = g.dataset("contact_gap").unwrap().read_raw().unwrap();
+    let status: Vec<i32> = g.dataset("contact_status").unwrap().read_raw().unwrap();
+    let force: Vec<f64> = g.dataset("contact_force").unwrap().read_raw().unwrap();
+    let wall: Vec<f64> = g.dataset("wall_force").unwrap().read_raw().unwrap();
+    assert_eq!((p.len(), gap.len(), status.len(), force.len(), wall.len()), (nn, nn, nn, 3 * nn, 4 * nn));
+    (nn, p, gap, status, force, wall)
+}
+
 /// `/history` repeats history.csv; the contact node fields are consistent with the wall forces
 /// of the history; the velocity is the step's mean velocity.
 fn check_history_table_and_contact_fields(out: &Path, file: &hdf5::File, names: &[String]) {
@@ -255,13 +269,7 @@ fn check_history_table_and_contact_fields(out: &Path, file: &hdf5::File, names: 
         let g = steps.group(name).unwrap();
         let step: u64 = g.attr("step").unwrap().read_scalar().unwrap();
         let row = (0..csv.len()).find(|&i| table[i * m + c_step] == step as f64).unwrap();
-        let nn = g.dataset("coordinates").unwrap().shape()[0];
-        let p: Vec<f64> = g.dataset("contact_pressure").unwrap().read_raw().unwrap();
-        let gap: Vec<f64> = g.dataset("contact_gap").unwrap().read_raw().unwrap();
-        let status: Vec<i32> = g.dataset("contact_status").unwrap().read_raw().unwrap();
-        let force: Vec<f64> = g.dataset("contact_force").unwrap().read_raw().unwrap();
-        let wall: Vec<f64> = g.dataset("wall_force").unwrap().read_raw().unwrap();
-        assert_eq!((p.len(), gap.len(), status.len(), force.len(), wall.len()), (nn, nn, nn, 3 * nn, 4 * nn));
+        let (nn, p, gap, status, force, wall) = contact_fields(&g);
         // the node's pressure is positive exactly where it is in contact; frictionless
         // penalty: sliding (1) and penetrating (gap < 0)
         for n in 0..nn {
@@ -416,13 +424,7 @@ fn barrier_run_writes_contact_fields_matching_the_history() {
     let (mut sticking, mut touching) = (0, 0);
     for (name, row) in names.iter().zip(&rows) {
         let g = steps.group(name).unwrap();
-        let nn = g.dataset("coordinates").unwrap().shape()[0];
-        let p: Vec<f64> = g.dataset("contact_pressure").unwrap().read_raw().unwrap();
-        let gap: Vec<f64> = g.dataset("contact_gap").unwrap().read_raw().unwrap();
-        let status: Vec<i32> = g.dataset("contact_status").unwrap().read_raw().unwrap();
-        let force: Vec<f64> = g.dataset("contact_force").unwrap().read_raw().unwrap();
-        let wall: Vec<f64> = g.dataset("wall_force").unwrap().read_raw().unwrap();
-        assert_eq!((p.len(), gap.len(), status.len(), force.len(), wall.len()), (nn, nn, nn, 3 * nn, 4 * nn));
+        let (nn, p, gap, status, force, wall) = contact_fields(&g);
         for n in 0..nn {
             assert!((0..=2).contains(&status[n]), "step {name}: status {} at node {n}", status[n]);
             assert!(p[n] >= 0.0 && p[n].is_finite(), "step {name}: pressure {} at node {n}", p[n]);
