@@ -509,9 +509,8 @@ impl Simulation {
 
     /// Factor the tangent; in the barrier's retry of a failed step (`descent`), make it
     /// positive definite first where it is not (Levenberg–Marquardt): when the Cholesky
-    /// factorisation finds it indefinite, its diagonal is raised by τ|K_ii| with τ = 1e-6,
-    /// 1e-5, … until it is positive definite (at most τ = 1; beyond, the indefinite
-    /// factorisation is kept). The update then descends on the incremental potential instead
+    /// factorisation finds it indefinite, or fails outright, its diagonal is raised
+    /// ([`Simulation::factor_shifted`]). The update then descends on the incremental potential instead
     /// of heading for a saddle: where two particles' corners face each other the barrier's
     /// Hessian has a negative curvature of the order of the force over the gap, and Newton
     /// with the exact tangent circled there (robustness case 08). At a minimum the tangent is
@@ -522,21 +521,46 @@ impl Simulation {
     /// assembly takes where it bifurcates (the 2 × 2 biaxial discs then stiffen earlier and
     /// miss the penalty method's pressure at 0.95 by 5.8 %, `tests/barrier_compaction.rs`).
     pub(super) fn factor_descent(&mut self) -> Result<(), NewtonFailure> {
-        self.factor()?;
-        if !self.barrier.as_ref().is_some_and(|b| b.descent) || !self.tangent_indefinite() {
-            return Ok(());
+        let descent = self.barrier.as_ref().is_some_and(|b| b.descent);
+        let first = self.factor();
+        match first {
+            Err(e) if !descent => return Err(e),
+            // a factorisation that fails outright (a zero pivot of the indefinite fallback)
+            // is shifted as an indefinite one is
+            Err(_) => {}
+            Ok(()) if !descent || !self.tangent_indefinite() => return Ok(()),
+            Ok(()) => {}
         }
+        self.factor_shifted()
+    }
+
+    /// Factor the tangent with each diagonal entry raised by τ s_i, s_i twice the absolute sum
+    /// of its row, τ = 1e-6, 1e-5, … until the Cholesky factorisation finds it positive
+    /// definite (at most τ = 1, where Gershgorin's theorem makes it so; beyond, the unshifted
+    /// tangent is factored as it is). The shifted diagonal stays in the tangent.
+    ///
+    /// The row sum, not |K_ii|: on the asphalt octagons of 5.2.1 (ν = 0.5, creep) nodes facing
+    /// nodes at gaps of d̂/250 have a negative curvature across the gap of the order of the
+    /// contact force over the gap, 400 times the elements' stiffness, and a diagonal entry
+    /// that is itself near zero; raising it by |K_ii| left the tangent indefinite at τ = 1
+    /// (and a zero pivot of the indefinite fallback failed the step outright, measured).
+    pub(super) fn factor_shifted(&mut self) -> Result<(), NewtonFailure> {
         let pos = self.sys.kk.diagonal_positions();
         let d0: Vec<f64> = pos.iter().map(|p| p.map_or(0.0, |p| self.sys.kk.values[p])).collect();
+        // each diagonal entry is raised by τ times twice its row's absolute sum: at τ = 1 the
+        // matrix is strictly diagonally dominant with a positive diagonal (Gershgorin), so
+        // positive definite, also where a diagonal entry itself is near zero or negative (a
+        // barrier pair's negative curvature across its gap)
+        let kk = &self.sys.kk;
+        let scale: Vec<f64> = (0..pos.len()).map(|i| 2.0 * kk.values[kk.row_ptr[i]..kk.row_ptr[i + 1]].iter().map(|v| v.abs()).sum::<f64>()).collect();
         let mut tau = 1e-6;
         loop {
-            for (p, d) in pos.iter().zip(&d0) {
+            for ((p, d), s) in pos.iter().zip(&d0).zip(&scale) {
                 if let Some(p) = *p {
-                    self.sys.kk.values[p] = d + tau * d.abs();
+                    self.sys.kk.values[p] = d + tau * s;
                 }
             }
-            self.factor()?;
-            if !self.tangent_indefinite() {
+            if self.factor().is_ok() && !self.tangent_indefinite() {
                 tracing::debug!(tau, "indefinite tangent shifted");
                 return Ok(());
             }
