@@ -151,7 +151,10 @@ fn main() -> ExitCode {
         true => tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level)),
         false => tracing_subscriber::EnvFilter::new(level),
     };
-    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).init();
+    // colour codes only on a terminal: a log redirected to a file (a batch job's stderr) stays
+    // plain text
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).with_ansi(ansi).init();
 
     match cli.command {
         Command::Check { case } => check(&case),

@@ -70,6 +70,20 @@ fn failed_run_exits_1_and_keeps_the_history() {
     assert_eq!(hist.lines().count(), 4, "header + the 3 converged steps are kept");
 }
 
+/// A log that goes to a file or a pipe (a batch job's stderr) is plain text: no colour codes
+/// (before, every level and field name came wrapped in ANSI escapes).
+#[test]
+fn a_redirected_log_has_no_colour_codes() {
+    let dir = tmpdir("plain_log");
+    let case = dir.join("case.toml");
+    let text = std::fs::read_to_string("jobs/default.toml").unwrap().replace("[time]", "[time]\nmax_steps = 2");
+    std::fs::write(&case, text).unwrap();
+    let o = mpfem().args(["-vv", "run", "--quiet", "--no-plots"]).arg(&case).arg("--out").arg(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("DEBUG"), "the debug log is on stderr: {err}");
+    assert!(!err.contains('\u{1b}'), "colour codes in a redirected log: {err}");
+}
+
 /// faer 0.24's indefinite sparse Cholesky fallback (the intranode Bunch–Kaufman LBLᵀ) fails an
 /// index assertion on a tangent of this case — 16 × 16 frictionless elastic discs at a 1.25 mm
 /// mesh (the scaling study's strong job with `MESH_SIZE=1.25`, 61,440 unknowns), whose disc
