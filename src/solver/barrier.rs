@@ -79,10 +79,10 @@ pub(super) struct BarrierRun {
     /// The contact state per node of the last converged step, for the results files
     /// ([`Simulation::barrier_nodal`]).
     pub nodal: NodalContact,
-    /// Descend on the incremental potential in this step's solves: an indefinite tangent
-    /// gets its pair Hessians projected onto the PSD matrices and, if it is still indefinite,
-    /// a shifted diagonal ([`Simulation::factor_descent`]). On in the retry of a step that
-    /// failed without.
+    /// Descend on the incremental potential in this step's solves: an indefinite tangent is
+    /// made definite by a small diagonal shift, else by projecting its pair Hessians onto the
+    /// PSD matrices, else by a larger shift ([`Simulation::factor_descent`]); the solve gets
+    /// four times the iterations. On in the retry of a step that failed without.
     pub descent: bool,
 }
 

@@ -43,12 +43,18 @@ struct BarrierLine {
 /// between stick and slip), a cycle of period two that held the residual at 1e-3 for 20
 /// iterations (robustness case 02, measured).
 fn barrier_descent(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>) -> bool {
-    let change = match barrier {
-        // the barrier's own change exactly, the trapezoidal rule on the rest only
+    let change = potential_change(eta, g0, slope, barrier);
+    g0 > 0.0 && change <= -ARMIJO * eta * g0 && slope >= -WOLFE_CURVATURE * g0
+}
+
+/// The change of the incremental potential along a step η as the line search estimates it:
+/// with `barrier`, the contact's part exactly and the trapezoidal rule on the rest only;
+/// without, the trapezoidal rule on the whole (see [`barrier_descent`] for the slopes).
+fn potential_change(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>) -> f64 {
+    match barrier {
         Some(b) => (b.energy - b.energy0) - 0.5 * eta * ((g0 + b.slope0) + (slope + b.slope)),
         None => -0.5 * eta * (g0 + slope),
-    };
-    g0 > 0.0 && change <= -ARMIJO * eta * g0 && slope >= -WOLFE_CURVATURE * g0
+    }
 }
 
 /// Whether the change of the incremental potential along a step η, as [`barrier_descent`]
@@ -56,10 +62,7 @@ fn barrier_descent(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>) 
 /// near convergence the barrier's own change is a difference of two large sums and says
 /// nothing, and a step that does not raise the residual is taken on that instead.
 fn within_round_off(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>) -> bool {
-    barrier.is_some_and(|b| {
-        let change = (b.energy - b.energy0) - 0.5 * eta * ((g0 + b.slope0) + (slope + b.slope));
-        change.abs() <= 1e-10 * b.energy0.abs().max(b.energy.abs())
-    })
+    barrier.is_some_and(|b| potential_change(eta, g0, slope, barrier).abs() <= 1e-10 * b.energy0.abs().max(b.energy.abs()))
 }
 
 impl Simulation {
