@@ -10,8 +10,9 @@ the project's design notes).
 
 Results go to results/paper/<job>/ (history.csv, summary.json, results.h5, plots) and
 results/studies/<study>/ (one directory per run, the overlay plot, study.csv and study.md).
-The whole set takes about an hour on two cores.
-Standard library only; needs `cargo` on the PATH.
+MPFEM=path/to/mpfem runs that binary instead of `cargo run --release` (e.g. a copy, so that a
+build beside the runs does not change it).
+Standard library only; needs `cargo` on the PATH (unless MPFEM is set).
 """
 import csv
 import json
@@ -113,13 +114,19 @@ WALLS = {"left": ["p_left"], "right": ["p_right"], "bottom": ["p_bottom"], "top"
          "left/right": ["p_left", "p_right"], "bottom/top": ["p_bottom", "p_top"]}
 
 
+def mpfem():
+    """The command that runs mpfem: $MPFEM, or the release build through cargo."""
+    binary = os.environ.get("MPFEM")
+    return [binary] if binary else ["cargo", "run", "--release", "--quiet", "--"]
+
+
 def run(job, rerun):
     out = os.path.join(OUT, job)
     if not rerun and os.path.exists(os.path.join(out, "summary.json")):
         return
     case = os.path.join(ROOT, "jobs", "paper", job + ".toml")
     print(f"reproduce: running {case}", file=sys.stderr)
-    subprocess.run(["cargo", "run", "--release", "--quiet", "--", "run", case, "--out", out], cwd=ROOT, check=False)
+    subprocess.run(mpfem() + ["run", case, "--out", out], cwd=ROOT, check=False)
 
 
 def run_study(name, rerun):
@@ -128,7 +135,7 @@ def run_study(name, rerun):
         return
     study = os.path.join(ROOT, "jobs", "studies", name + ".toml")
     print(f"reproduce: running the study {study}", file=sys.stderr)
-    subprocess.run(["cargo", "run", "--release", "--quiet", "--", "study", study, "--out", out], cwd=ROOT, check=False)
+    subprocess.run(mpfem() + ["study", study, "--out", out], cwd=ROOT, check=False)
 
 
 def studies():

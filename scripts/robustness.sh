@@ -6,8 +6,8 @@
 #   bash scripts/robustness.sh OUT [CASE.toml ...]
 #
 # Without cases: every jobs/robustness/*.toml up to 64 particles (the 256- and 1,024-particle
-# cases are run by naming them). METHOD=barrier runs them with `[contact] method = "barrier"`
-# instead of the default; TIMEOUT (s, default 1800) stops a case that takes longer; MPFEM
+# cases are run by naming them). METHOD=penalty (or any other contact method) runs them with
+# `[contact] method = "$METHOD"` instead of the default (the barrier); TIMEOUT (s, default 1800) stops a case that takes longer; MPFEM
 # (default target/release/mpfem) is the binary. OUT keeps each run's folder and the table
 # OUT/robustness.txt. Exit 0 when every case reached its target (or, for a jam case, jammed).
 set -euo pipefail
@@ -39,8 +39,8 @@ for f in "${cases[@]}"; do
   name=$(basename "$f" .toml)
   case_file="$out/$name.toml"
   cp "$f" "$case_file"
-  if [ "$method" = barrier ]; then
-    sed -i 's/^\[contact\]/[contact]\nmethod = "barrier"/' "$case_file"
+  if [ "$method" != default ]; then
+    sed -i "s/^\\[contact\\]/[contact]\\nmethod = \"$method\"/" "$case_file"
   fi
   start=$(date +%s.%N)
   rc=0

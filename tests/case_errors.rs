@@ -568,10 +568,10 @@ fn never_panics_on_garbage() {
 fn lagrange_regularisation_is_checked_and_defaults_to_1e_4() {
     let c = parse(BASE).unwrap();
     assert_eq!(c.contact.lagrange_regularisation, 1e-4);
-    let c = parse(&format!("{BASE}\n[contact]\nlagrange_regularisation = 0.0\n")).unwrap();
+    let c = parse(&format!("{BASE}\n[contact]\nmethod = \"lagrange\"\nlagrange_regularisation = 0.0\n")).unwrap();
     assert_eq!(c.contact.lagrange_regularisation, 0.0);
     for v in ["-0.001", "1", "2.5"] {
-        let e = err_of(&format!("{BASE}\n[contact]\nlagrange_regularisation = {v}\n"));
+        let e = err_of(&format!("{BASE}\n[contact]\nmethod = \"lagrange\"\nlagrange_regularisation = {v}\n"));
         assert_has(&e, &["contact.lagrange_regularisation", v, "0 <= r < 1"]);
     }
 }
@@ -583,11 +583,44 @@ fn contact_normal_is_segment_or_smoothed() {
     use mpfem::case::ContactNormal;
     assert_eq!(parse(BASE).unwrap().contact.normal, ContactNormal::default());
     for (v, n) in [("segment", ContactNormal::Segment), ("smoothed", ContactNormal::Smoothed)] {
-        assert_eq!(parse(&format!("{BASE}\n[contact]\nnormal = \"{v}\"\n")).unwrap().contact.normal, n);
+        assert_eq!(parse(&format!("{BASE}\n[contact]\nmethod = \"penalty\"\nnormal = \"{v}\"\n")).unwrap().contact.normal, n);
     }
-    let e = err_of(&format!("{BASE}\n[contact]\nnormal = \"curved\"\n"));
+    let e = err_of(&format!("{BASE}\n[contact]\nmethod = \"penalty\"\nnormal = \"curved\"\n"));
     assert_eq!(e.key, "contact.normal");
     assert_has(&e, &["value \"curved\"", "\"segment\"", "\"smoothed\""]);
+}
+
+/// The barrier is the default contact method, with its softer springs that stiffen on a
+/// cut-back; the keys of the node-to-segment methods are an error with it (given or by default),
+/// naming the key, the value and what was expected, not a silent no-op.
+#[test]
+fn barrier_is_the_default_and_refuses_node_to_segment_keys() {
+    use mpfem::contact::ContactMethod;
+    for text in [BASE.to_string(), format!("{BASE}\n[contact]\ncontact = \"sliding\"\n")] {
+        let c = parse(&text).unwrap();
+        assert_eq!(c.contact.method, ContactMethod::Barrier);
+        assert!(c.stabilisation.stiffen_on_cutback);
+        assert_eq!(c.stabilisation.factor, mpfem::stabilise::BARRIER_STABILISATION);
+    }
+    let penalty = parse(&format!("{BASE}\n[contact]\nmethod = \"penalty\"\n")).unwrap();
+    assert_eq!(penalty.contact.method, ContactMethod::Penalty);
+    assert!(!penalty.stabilisation.stiffen_on_cutback);
+    for (key, value) in [
+        ("penalty", "1500.5"),
+        ("penetration_tol", "0.001"),
+        ("max_augmentations", "5"),
+        ("search_distance", "2.5"),
+        ("lagrange_regularisation", "0.5"),
+        ("normal", "\"smoothed\""),
+    ] {
+        for (method, said) in [("", "whose default is \"barrier\""), ("method = \"barrier\"\n", "with contact.method = \"barrier\"")] {
+            let e = err_of(&format!("{BASE}\n[contact]\n{method}{key} = {value}\n"));
+            assert_eq!(e.key, format!("contact.{key}"));
+            assert_has(&e, &[value, said, "\"penalty\""]);
+        }
+        let text = format!("{BASE}\n[contact]\nmethod = \"augmented_lagrangian\"\n{key} = {value}\n");
+        assert!(parse(&text).is_ok(), "{key} refused with the augmented Lagrangian");
+    }
 }
 
 /// `[contact] viscous_retry` is off by default, on when asked, and refused with viscous springs

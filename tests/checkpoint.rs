@@ -240,7 +240,9 @@ fn sigterm_leaves_a_checkpoint_and_the_restart_is_bit_for_bit() {
 
 /// One incompressible asphalt octagon with `[remesh]` (the 5.2.1 job on a 1 × 1 grid, as in
 /// tests/remesh.rs): re-meshed at step 11 of 28; the checkpoint at step 24 carries the new
-/// mesh, and the restart from it equals the uninterrupted run bit for bit.
+/// mesh, and the restart from it equals the uninterrupted run bit for bit. With the penalty
+/// method: its corner pressed into the walls crosses the quality limits; with the barrier (the
+/// default) the octagon reaches 0.99 without a re-mesh.
 #[test]
 fn restart_after_a_remesh_is_bit_for_bit() {
     let dir = tmpdir("remesh");
@@ -250,7 +252,9 @@ fn restart_after_a_remesh_is_bit_for_bit() {
         .replace("file = \"../", &format!("file = \"{}/", jobs.display()))
         .replace("nx = 4", "nx = 1")
         .replace("ny = 4", "ny = 1")
-        .replace("solid_ratio = 0.99\n", "solid_ratio = 0.94\n");
+        .replace("solid_ratio = 0.99\n", "solid_ratio = 0.94\n")
+        .replace("contact = \"sliding\"", "method = \"penalty\"\ncontact = \"sliding\"");
+    assert!(text.contains("method = \"penalty\""));
     let case = dir.join("case.toml");
     std::fs::write(&case, format!("{text}\n[remesh]\n\n[output]\nevery = 1\ncheckpoint_every = 12\ncheckpoint_minutes = 0\n")).unwrap();
     let a = dir.join("a");

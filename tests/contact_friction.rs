@@ -19,8 +19,8 @@ fn coulomb_block_sticks_then_slides_at_mu_n() {
 #[test]
 fn coulomb_block_sticks_then_slides_at_mu_n_barrier() {
     let text = std::fs::read_to_string("jobs/verification/coulomb_block.toml").unwrap();
-    assert!(text.contains("[contact]\n"));
-    coulomb_block(text.replace("[contact]\n", "[contact]\nmethod = \"barrier\"\n"), 1e-3);
+    assert!(text.contains("method = \"penalty\"\n"));
+    coulomb_block(text.replace("method = \"penalty\"\n", "method = \"barrier\"\n"), 1e-3);
 }
 
 fn coulomb_block(text: String, tol: f64) {

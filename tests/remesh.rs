@@ -417,8 +417,11 @@ fn a_run_with_remeshing_keeps_volume_and_writes_each_mesh() {
         .replace("file = \"../", &format!("file = \"{}/", base.display()))
         .replace("nx = 4", "nx = 1")
         .replace("ny = 4", "ny = 1")
-        .replace("solid_ratio = 0.99\n", "solid_ratio = 0.94\n");
-    assert!(text.contains("nx = 1") && text.contains("ny = 1") && text.contains("solid_ratio = 0.94"));
+        .replace("solid_ratio = 0.99\n", "solid_ratio = 0.94\n")
+        // the penalty method: its corner pressed into the walls crosses the quality limits; with
+        // the barrier (the default) the octagon reaches 0.99 on its first mesh
+        .replace("contact = \"sliding\"", "method = \"penalty\"\ncontact = \"sliding\"");
+    assert!(text.contains("nx = 1") && text.contains("ny = 1") && text.contains("solid_ratio = 0.94") && text.contains("method = \"penalty\""));
     let case = dir.join("case.toml");
     std::fs::write(&case, format!("{text}\n[remesh]\n\n[output]\nevery = 1\n")).unwrap();
     let out = dir.join("out");
@@ -655,6 +658,7 @@ material = "m"
 mesh_size = 1.0
 shape = { type = "rectangle", origin = [0.0, 0.0], size = [10.0, 4.0] }
 [contact]
+method = "penalty"
 contact = "rubbing"
 friction = 0.3
 [time]

@@ -121,7 +121,7 @@ pub struct WallRaw {
     pub friction: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct ContactRaw {
     pub method: Option<String>,

@@ -307,12 +307,9 @@ impl Cx<'_> {
             if let Some(i) = contact.walls.iter().position(|k| matches!(k, ContactKind::Cohering)) {
                 return Err(self.err(
                     &format!("walls[{i}].contact"),
-                    "tied (cohering) walls with the barrier contact (contact.method = \"barrier\") are not built yet; expected \"sliding\" or \"rubbing\", or another contact.method",
+                    "tied (cohering) walls with the barrier contact (contact.method = \"barrier\", the default) are not built yet; expected \"sliding\" or \"rubbing\", or contact.method = \"augmented_lagrangian\"",
                 ));
             }
-        }
-        if contact.method == ContactMethod::Barrier && contact.normal != crate::contact::ContactNormal::Segment {
-            return Err(self.err("contact.normal", "given with contact.method = \"barrier\": the barrier acts on the distance to the straight boundary edges and has no master normal; expected no `normal` key with the barrier"));
         }
         if contact.dhat.is_some() && contact.method != ContactMethod::Barrier {
             return Err(self.err("contact.dhat", "given without contact.method = \"barrier\": d̂ is the barrier's activation distance; expected it only with the barrier"));
@@ -1205,7 +1202,8 @@ impl Cx<'_> {
 
     fn contact(&self, c: Option<raw::ContactRaw>) -> Result<(ContactParams, StabilisationParams), CaseError> {
         let (mut spec, mut stab) = (ContactParams::default(), StabilisationParams::default());
-        let Some(c) = c else { return Ok((spec, stab)) };
+        let c = c.unwrap_or_default();
+        let explicit_method = c.method.is_some();
         if let Some(m) = c.method {
             spec.method = match self.choice("contact.method", &m, &["penalty", "augmented_lagrangian", "lagrange", "barrier"])? {
                 "penalty" => ContactMethod::Penalty,
@@ -1213,6 +1211,25 @@ impl Cx<'_> {
                 "barrier" => ContactMethod::Barrier,
                 _ => ContactMethod::AugmentedLagrangian,
             };
+        }
+        if spec.method == ContactMethod::Barrier {
+            // the keys of the node-to-segment methods mean nothing to the barrier: an error, not
+            // a silent no-op, above all where the barrier is only the default
+            let given = if explicit_method { "with contact.method = \"barrier\"" } else { "without contact.method, whose default is \"barrier\"" };
+            let node_to_segment = [
+                ("penalty", c.penalty.map(|v| v.to_string())),
+                ("penetration_tol", c.penetration_tol.map(|v| v.to_string())),
+                ("max_augmentations", c.max_augmentations.map(|v| v.to_string())),
+                ("search_distance", c.search_distance.map(|v| v.to_string())),
+                ("lagrange_regularisation", c.lagrange_regularisation.map(|v| v.to_string())),
+                ("normal", c.normal.as_ref().map(|v| format!("\"{v}\""))),
+            ];
+            if let Some((key, Some(value))) = node_to_segment.into_iter().find(|(_, v)| v.is_some()) {
+                return Err(self.err(
+                    &format!("contact.{key}"),
+                    format!("value {value} given {given}: `{key}` belongs to the node-to-segment methods and the barrier has no use for it; expected no `{key}` key, or contact.method = \"penalty\", \"augmented_lagrangian\" or \"lagrange\""),
+                ));
+            }
         }
         spec.kind = self.contact_kind("contact.contact", c.contact, c.friction)?;
         if let Some(v) = c.penalty {

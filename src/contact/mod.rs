@@ -54,7 +54,7 @@ pub enum ContactMethod {
     /// Incremental Potential Contact: a smoothly clamped log barrier on the distance of every
     /// boundary node to every boundary edge of another particle and to every wall closer than
     /// d̂ ([`barrier`], [`barrier_problem`]), with a line search that never lets an iterate
-    /// cross; lagged, mollified Coulomb friction. No ties yet.
+    /// cross; lagged, mollified Coulomb friction; ties for cohering particles. The default.
     Barrier,
 }
 
@@ -106,7 +106,7 @@ pub struct ContactParams {
 impl Default for ContactParams {
     fn default() -> Self {
         Self {
-            method: ContactMethod::Penalty,
+            method: ContactMethod::Barrier,
             kind: ContactKind::Sliding,
             walls: Vec::new(),
             penalty: None,

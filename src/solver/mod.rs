@@ -191,7 +191,7 @@ impl Simulation {
             let mut eval = crate::contact::barrier_problem::BarrierEval::default();
             if let Err(e) = b.contact.evaluate(&model.x0, &b.walls0, false, &mut eval) {
                 return Err(SolveError::Contact(format!(
-                    "{e} at the start: the barrier contact (contact.method = \"barrier\") needs the particles apart from each other at the start (walls may touch them); expected a gap between particles, or another contact.method"
+                    "{e} at the start: the barrier contact (contact.method = \"barrier\", the default) needs the particles apart from each other at the start (walls may touch them); expected a gap between particles, `contact = \"cohering\"` (touching particles are tied), or contact.method = \"penalty\" or \"augmented_lagrangian\""
                 )));
             }
         }
