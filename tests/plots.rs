@@ -3,7 +3,7 @@
 //! runs, draws chosen steps and rejects bad input with exit code 2.
 //!
 //! The runs are the small 2 × 2 disc job of tests/results_h5.rs (coarse mesh, lateral
-//! compaction to solid ratio 0.74, output every 2 steps: well under a second) and the default
+//! compaction to solid ratio 0.741, output every 2 steps: well under a second) and the default
 //! job (one block, no walls). The pictures are decoded and checked for what they show: the
 //! series colours in the plot area, one SVG polyline per wall series that carries a force, the
 //! axis labels and legend labels, the colour-map colours of the extreme elements, the colour
@@ -44,7 +44,7 @@ fn run_case(dir: &Path, case_text: &str, extra: &[&str]) -> (PathBuf, Output) {
 }
 
 /// The case of tests/results_h5.rs with all four walls moving in (biaxial): reaches solid
-/// ratio 0.74 in a few steps, every wall carries a force at the end.
+/// ratio 0.741 in a few steps, every wall carries a force at the end.
 fn biaxial_case() -> String {
     CASE.replace(
         "side = \"bottom\"\nposition = 0.0\n",

@@ -1,5 +1,5 @@
 //! `mpfem run` writes `results.h5` and `results.xdmf`: a small compaction run (2 x 2 discs,
-//! coarse mesh, stopped at solid ratio 0.74, output every 2 steps) is read back with the hdf5
+//! coarse mesh, stopped at solid ratio 0.741, output every 2 steps) is read back with the hdf5
 //! crate; the shapes, the output steps and their times agree with `history.csv`, the last step
 //! is always written, and the XDMF file is well formed with one grid per output step.
 
@@ -188,7 +188,7 @@ fn check_summary(out: &Path, case: &Path) {
     assert_eq!(f["step"].as_f64().unwrap(), col("step"));
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-12);
     assert!(close(f["solid_ratio"].as_f64().unwrap(), col("solid_ratio")));
-    assert!(s["run"]["stop_reason"] == "solid ratio reached" && col("solid_ratio") >= 0.74);
+    assert!(s["run"]["stop_reason"] == "solid ratio reached" && col("solid_ratio") >= 0.741);
     for (k, side) in ["left", "right", "bottom", "top"].iter().enumerate() {
         assert!(close(f["pressure"][k].as_f64().unwrap(), col(&format!("p_{side}"))), "p_{side}");
         assert!(close(f["force"][k].as_f64().unwrap(), col(&format!("f_{side}"))), "f_{side}");
@@ -295,7 +295,7 @@ fn check_history_table_and_contact_fields(out: &Path, file: &hdf5::File, names: 
         assert!((fx - (f_hist[0] - f_hist[1])).abs() <= 1e-8 * scale, "step {step}: Σ contact fx {fx} vs {}", f_hist[0] - f_hist[1]);
         assert!((fy - (f_hist[2] - f_hist[3])).abs() <= 1e-8 * scale, "step {step}: Σ contact fy {fy} vs {}", f_hist[2] - f_hist[3]);
         // the contact force on the nodes that touch a wall is that wall's push (the walls
-        // push inwards: +x left, −x right, +y bottom, −y top); at solid ratio ≤ 0.74 no node
+        // push inwards: +x left, −x right, +y bottom, −y top); at solid ratio ≤ 0.741 no node
         // touching a wall touches another disc, so the sums are the history's wall forces
         for (k, (c, sign)) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)].into_iter().enumerate() {
             let sum: f64 = (0..nn).filter(|&n| wall[4 * n + k] > 0.0).map(|n| sign * force[3 * n + c]).sum();
@@ -347,7 +347,7 @@ fn killed_run_leaves_a_readable_results_file() {
     let case = dir.join("case.toml");
     let long = CASE
         .replace("every = 2", "every = 1")
-        .replace("solid_ratio = 0.74", "solid_ratio = 0.9")
+        .replace("solid_ratio = 0.741\n", "solid_ratio = 0.9\n")
         .replace("dt_max = 0.1", "dt_max = 0.01")
         .replace("dt = 0.05", "dt = 0.01");
     std::fs::write(&case, long).unwrap();
@@ -408,7 +408,7 @@ fn barrier_run_writes_contact_fields_matching_the_history() {
     let dir = tmpdir("barrier_fields");
     let case = CASE
         .replace("method = \"penalty\"\ncontact = \"sliding\"", "method = \"barrier\"\ncontact = \"rubbing\"\nfriction = 0.2")
-        .replace("solid_ratio = 0.74", "solid_ratio = 0.85")
+        .replace("solid_ratio = 0.741\n", "solid_ratio = 0.85\n")
         .replace("every = 2", "every = 1");
     assert!(case.contains("friction = 0.2") && case.contains("solid_ratio = 0.85"));
     let out = run_quiet(&dir, &case);

@@ -43,7 +43,7 @@ set = {{ "contact.contact" = "rubbing", "contact.friction" = 0.2, "output.every"
     assert!(o.status.success(), "{err}");
     let out = dir.join("out");
     let mut finals = Vec::new();
-    for (label, target) in [("phi072", 0.72), ("phi074", 0.74), ("rubbing", 0.74)] {
+    for (label, target) in [("phi072", 0.72), ("phi074", 0.74), ("rubbing", 0.741)] {
         let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join(label).join("summary.json")).unwrap()).unwrap();
         assert_eq!(s["status"], "completed", "{label}");
         assert_eq!(s["run"]["stop_reason"], "solid ratio reached", "{label}");
