@@ -185,6 +185,41 @@ fn barrier_restart_is_bit_for_bit() {
     }
 }
 
+/// The same SIGTERM delivered twice within a second (`timeout` signals the command and then
+/// its process group; a batch system may signal the job's shell and all its processes) is one
+/// request: the run still finishes its step and writes its checkpoint (exit code 3), where it
+/// used to end at once (exit code 130) without one. The second signal comes 10 ms after the
+/// first: after the first was delivered (two pending signals would merge), before the step
+/// under way ends.
+#[test]
+fn a_sigterm_sent_twice_within_a_second_still_leaves_a_checkpoint() {
+    let dir = tmpdir("sigterm_twice");
+    let case = case_from("jobs/compaction/discs_2x2_biaxial_mu02.toml", &dir, "[output]\ncheckpoint_every = 0\ncheckpoint_minutes = 0\n");
+    let d = dir.join("d");
+    std::fs::create_dir_all(&d).unwrap();
+    let log = std::fs::File::create(dir.join("d.log")).unwrap();
+    let mut child = mpfem().args(["run", "--no-plots"]).arg(&case).arg("--out").arg(&d).stderr(Stdio::from(log)).spawn().unwrap();
+    let t0 = Instant::now();
+    while std::fs::read_to_string(d.join("history.csv")).map_or(0, |t| t.lines().count().saturating_sub(1)) < 2 {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before the signal");
+        assert!(t0.elapsed() < Duration::from_secs(120), "no history rows after 120 s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    for _ in 0..2 {
+        // SAFETY: sending a signal to our own child process
+        assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) }, 0);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let status = child.wait().unwrap();
+    let err = std::fs::read_to_string(dir.join("d.log")).unwrap();
+    assert_eq!(status.code(), Some(3), "exit code after two SIGTERMs 10 ms apart: {err}");
+    let rows = history_lines(&d).len() - 1;
+    assert_eq!(checkpoint_step(&d) as usize, rows, "the checkpoint is the last step");
+    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["status"], "interrupted");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// 2 × 2 discs, biaxial, Coulomb friction μ = 0.2 (stick anchors in the pair histories; 48
 /// steps, 18 cut-backs), no periodic checkpoint: SIGTERM after a few steps stops the run after
 /// its current step with exit code 3, a readable checkpoint of that step, a closed results
