@@ -248,6 +248,11 @@ impl Loading {
         Some([pos(WallSide::Left)?, pos(WallSide::Right)?, pos(WallSide::Bottom)?, pos(WallSide::Top)?])
     }
 
+    /// The die's area at time t (mm²), when all four walls exist: what a solid ratio divides by.
+    pub fn die_area(&self, t: f64) -> Option<f64> {
+        self.die(t).map(|[x0, x1, y0, y1]| (x1 - x0) * (y1 - y0))
+    }
+
     /// Current length of wall `w` (mm): the distance between the two walls it spans, or, when
     /// those walls are missing, the extent of the points `x` (the particles' boundary nodes)
     /// across it.

@@ -471,8 +471,7 @@ impl Simulation {
     /// walls close a die.
     pub fn initial_solid_ratio(&self) -> Option<f64> {
         self.contact.as_ref()?;
-        let [x0, x1, y0, y1] = self.model.loading.die(0.0)?;
-        let die = (x1 - x0) * (y1 - y0);
+        let die = self.model.loading.die_area(0.0)?;
         (die > 0.0).then(|| self.run.area0_total / die)
     }
 

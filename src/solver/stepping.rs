@@ -103,8 +103,7 @@ impl Simulation {
         let (Some(target), Some(c)) = (self.model.stop.solid_ratio, self.run.last_report.as_ref().and_then(|r| r.compaction.as_ref())) else {
             return dt;
         };
-        let loading = &self.model.loading;
-        let area = |t: f64| loading.die(t).map(|[x0, x1, y0, y1]| (x1 - x0) * (y1 - y0));
+        let area = |t: f64| self.model.loading.die_area(t);
         let t0 = self.sol.time;
         let (Some(a0), Some(a1)) = (area(t0), area(t0 + dt)) else { return dt };
         // aimed a little beyond the target (1e-4 of solid ratio), so that the round-off of the
@@ -116,7 +115,7 @@ impl Simulation {
         if solid >= target * a0 || !reaches(a1) {
             return dt;
         }
-        // bisection on the step for the time the die's area falls to solid / target (the
+        // bisection on the step for the time the die's area falls to solid / aim (the
         // walls may follow an amplitude table, so no closed form); the upper end reaches it
         let (mut lo, mut hi) = (0.0, dt);
         for _ in 0..60 {
@@ -404,8 +403,8 @@ impl Simulation {
                 out.force[k] += f;
                 out.pressure[k] += if len > 0.0 { f / len } else { 0.0 };
             }
-            if let Some([x0, x1, y0, y1]) = loading.die(t) {
-                out.solid_ratio = total / ((x1 - x0) * (y1 - y0));
+            if let Some(die) = loading.die_area(t) {
+                out.solid_ratio = total / die;
             }
             out.stabilisation_energy = self.springs.energy;
             out.external_work = self.run.work_ext;
