@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The robustness suite (jobs/robustness/): run its cases and print one line a case — how the
 # run ended, the final solid ratio, steps, Newton iterations a step, cut-backs, the share of
-# the wall work the stabilisation springs took, and the wall time.
+# the wall work the stabilisation springs took, and the wall time. `it/step` counts the Newton
+# iterations of the converged attempts; `solves/step` counts the linear solves of every attempt
+# (the failed attempts before a retry or a cut-back included), the work the run did.
 #
 #   bash scripts/robustness.sh OUT [CASE.toml ...]
 #
@@ -13,7 +15,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 1 ]; then
-  sed -n '2,13p' "$0" >&2
+  sed -n '2,14p' "$0" >&2
   exit 2
 fi
 out=$1
@@ -33,7 +35,7 @@ else
   done
 fi
 table="$out/robustness.txt"
-printf '%-48s %-8s %-22s %8s %6s %8s %8s %8s %9s\n' case method end solid steps it/step cutbacks springs wall_s | tee "$table"
+printf '%-48s %-8s %-22s %8s %6s %8s %11s %8s %8s %9s\n' case method end solid steps it/step solves/step cutbacks springs wall_s | tee "$table"
 all_ok=0
 for f in "${cases[@]}"; do
   name=$(basename "$f" .toml)
@@ -53,16 +55,17 @@ wall = float(end) - float(start)
 try:
     s = json.load(open(path))
 except (OSError, ValueError):
-    print(f"{'timeout' if rc == '124' else 'no summary (exit ' + rc + ')':22s} {'-':>8s} {'-':>6s} {'-':>8s} {'-':>8s} {'-':>8s} {wall:9.1f} 1")
+    print(f"{'timeout' if rc == '124' else 'no summary (exit ' + rc + ')':22s} {'-':>8s} {'-':>6s} {'-':>8s} {'-':>11s} {'-':>8s} {'-':>8s} {wall:9.1f} 1")
     sys.exit()
 run = s.get("run") or {}
 final = s.get("final") or {}
 reason = run.get("stop_reason") or s.get("status") or "?"
 steps = run.get("steps") or final.get("step") or 0
 its = run.get("newton_iterations", 0)
+solves = (run.get("timing") or {}).get("linear_solves", 0)
 share = final.get("stabilisation_ratio", float("nan"))
 ok = reason in ("solid ratio reached", "wall pressure reached", "jammed")
-print(f"{reason[:22]:22s} {final.get('solid_ratio', float('nan')):8.4f} {steps:6d} {its / max(steps, 1):8.1f} "
+print(f"{reason[:22]:22s} {final.get('solid_ratio', float('nan')):8.4f} {steps:6d} {its / max(steps, 1):8.1f} {solves / max(steps, 1):11.1f} "
       f"{run.get('cutbacks', 0):8d} {100 * share:7.2f}% {wall:9.1f} {0 if ok else 1}")
 PY
 )
