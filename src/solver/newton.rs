@@ -16,15 +16,6 @@ const WOLFE_CURVATURE: f64 = 0.9;
 /// The sufficient-decrease constant c₁ of the barrier's line search (Armijo).
 const ARMIJO: f64 = 1e-4;
 
-/// A whole Newton step along which the incremental potential still falls at this fraction of
-/// its initial slope where it lands is extended ([`Simulation::extend_step`]): at a regular
-/// minimum Newton lands on it (a slope of 0 there, up to the error of the quadratic model),
-/// at the barrier's degenerate zero at d̂ it lands halfway (a cubic potential: a slope of 1/4
-/// of the initial one there, [`extension_descent`]'s tests).
-const EXTEND_SLOPE: f64 = 0.2;
-/// An extended step goes at most this many times the Newton update (by doublings).
-const MAX_EXTENSION: f64 = 8.0;
-
 /// The contact's part E_c of the incremental potential (the barrier and the lagged friction)
 /// and its slope ∇E_c·Δu at the start of a line search (`energy0`, `slope0`) and at the step
 /// tried. The trapezoidal rule is exact for a quadratic only; the barrier's Hessian jumps
@@ -74,79 +65,7 @@ fn within_round_off(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>)
     barrier.is_some_and(|b| potential_change(eta, g0, slope, barrier).abs() <= 1e-10 * b.energy0.abs().max(b.energy.abs()))
 }
 
-/// Whether the segment η ∈ [a, a + h] of an extended line search decreases the incremental
-/// potential enough: with `start` = (−Π′(a), the contact's part (E_c, E_c′) at a) and `end` the
-/// same at a + h, Armijo's sufficient decrease against the slope at a (the contact's part of
-/// the change exactly, the rest by the trapezoidal rule, as [`barrier_descent`]) and the far
-/// side of the strong Wolfe curvature condition.
-fn extension_descent(h: f64, start: (f64, Option<(f64, f64)>), end: (f64, Option<(f64, f64)>)) -> bool {
-    let (sa, ca) = start;
-    let (sb, cb) = end;
-    let (ea, pa) = ca.unwrap_or((0.0, 0.0));
-    let (eb, pb) = cb.unwrap_or((0.0, 0.0));
-    let change = (eb - ea) - 0.5 * h * ((sa + pa) + (sb + pb));
-    sa > 0.0 && change <= -ARMIJO * h * sa && sb >= -WOLFE_CURVATURE * sa
-}
-
 impl Simulation {
-    /// A Newton step accepted whole (η = 1) and still steeply downhill where it lands
-    /// (−Π′(1) ≥ [`EXTEND_SLOPE`] · (−Π′(0))) is extended by doublings, η = 2, 4, … up to
-    /// [`MAX_EXTENSION`], while each doubling is collision-free (CCD) and decreases the potential
-    /// ([`extension_descent`]); the iterate ends at the last η accepted, evaluated there.
-    ///
-    /// Why: the barrier is C² at d̂ with its energy, force and stiffness all zero there, so its
-    /// energy is cubic in d̂ − d. A particle that the barrier pushes away from another while
-    /// nothing else holds it (a loose particle, held by the stabilisation springs alone) has
-    /// its equilibrium at d ≈ d̂, where the tangent vanishes: Newton then halves the distance
-    /// to d̂ in every iteration (a linear convergence with ratio 1/2), and took 12–13
-    /// iterations of each loose step of robustness case 01 (measured: the largest update
-    /// halved from 0.35 mm to 1.5e-6 mm). The doubled step is the exact solution of that cubic.
-    /// At a regular minimum the slope where Newton lands is near zero and nothing changes.
-    ///
-    /// `u` is at η = 1 and evaluated there on entry (`at`: −Π′(1) and the contact's part of the
-    /// potential); returns the η reached and, when the iterate was evaluated again, its
-    /// residual norm.
-    #[allow(clippy::too_many_arguments)]
-    fn extend_step(&mut self, u: &mut [f64], u0: &[f64], du: &[f64], g0: f64, inc: TimeIncrement, vol: &[Volumetric], tangent: bool, mut at: (f64, Option<(f64, f64)>)) -> Result<(f64, Option<f64>), NewtonFailure> {
-        let mut eta: f64 = 1.0;
-        let mut rnorm = None;
-        while eta < MAX_EXTENSION && at.0 >= EXTEND_SLOPE * g0 {
-            let further: Vec<f64> = du.iter().map(|d| eta * d).collect();
-            if self.barrier_step_limit(u, &further) < 1.0 {
-                break;
-            }
-            let next = 2.0 * eta;
-            for d in 0..u.len() {
-                u[d] = u0[d] + next * du[d];
-            }
-            let taken = match self.evaluate(u, inc, vol, tangent) {
-                Ok(rn) if rn.is_finite() => {
-                    let slope: f64 = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum();
-                    let end = (slope, self.contact_potential(u, du));
-                    extension_descent(next - eta, at, end).then_some((rn, end))
-                }
-                _ => None,
-            };
-            match taken {
-                Some((rn, end)) => {
-                    tracing::debug!(eta = next, slope = end.0 / g0, "Newton step extended");
-                    eta = next;
-                    rnorm = Some(rn);
-                    at = end;
-                }
-                None => {
-                    // back to the last η taken
-                    for d in 0..u.len() {
-                        u[d] = u0[d] + eta * du[d];
-                    }
-                    rnorm = Some(self.evaluate(u, inc, vol, tangent)?);
-                    break;
-                }
-            }
-        }
-        Ok((eta, rnorm))
-    }
-
     /// Newton from `u` (prescribed dofs already at their values of `inc.time`), with the
     /// augmented-Lagrangian updates of the incompressible bodies and of the contact. With
     /// `restart`, a first guess that inverts an element is replaced once by the last converged
@@ -363,8 +282,6 @@ impl Simulation {
             let (accept_below, fail_below) = if barrier { (0.06 * eta_max * 1e-2, 0.06 * eta_max * 1e-3) } else { (0.06, 0.06) };
             let r_old = rnorm;
             let mut accepted = false;
-            // the slope and the contact's part of the potential where the step was accepted
-            let mut at_accepted = None;
             for _ in 0..tries {
                 for d in 0..u.len() {
                     u[d] = u0[d] + eta * du_full[d];
@@ -391,13 +308,10 @@ impl Simulation {
                         // only where the potential cannot: an update that is no descent
                         // direction (an indefinite tangent; the step's retry shifts it,
                         // `factor_descent`) and a change of the potential below round-off.
-                        let mut here = None;
                         let better = rn.is_finite()
                             && if barrier {
                                 let slope: f64 = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum();
-                                let contact = self.contact_potential(u, &du_full);
-                                here = Some((slope, contact));
-                                let line = line0.zip(contact).map(|((energy0, slope0), (energy, slope))| BarrierLine { energy0, slope0, energy, slope });
+                                let line = line0.zip(self.contact_potential(u, &du_full)).map(|((energy0, slope0), (energy, slope))| BarrierLine { energy0, slope0, energy, slope });
                                 alpha0 < 1.0 || barrier_descent(eta, g0, slope, line) || (rn <= r_old && (g0 <= 0.0 || within_round_off(eta, g0, slope, line)))
                             } else {
                                 rn < r_old || s < 0.9 * energy
@@ -405,24 +319,12 @@ impl Simulation {
                         if !line_search || better || eta < accept_below {
                             rnorm = rn;
                             accepted = rn.is_finite();
-                            at_accepted = here;
                             break;
                         }
                         eta *= 0.5;
                     }
                     Err(e) if eta < fail_below => return Err(e),
                     Err(_) => eta *= 0.5,
-                }
-            }
-            // a whole Newton step that is still steeply downhill where it lands: the minimum lies
-            // beyond it (the barrier's degenerate zero at d̂, see `extend_step`)
-            if let (true, Some((slope, contact))) = (accepted && line_search && alpha0 >= 1.0 && eta >= 1.0 && g0 > 0.0, at_accepted) {
-                if slope >= EXTEND_SLOPE * g0 && rnorm > self.spec.residual_tol * self.reference_force() {
-                    let (reached, rn) = self.extend_step(u, &u0, &du_full, g0, inc, vol, full, (slope, contact))?;
-                    eta = reached;
-                    if let Some(rn) = rn {
-                        rnorm = rn;
-                    }
                 }
             }
             last_update = du_full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -533,7 +435,7 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use super::{barrier_descent, extension_descent, within_round_off, BarrierLine, EXTEND_SLOPE};
+    use super::{barrier_descent, within_round_off, BarrierLine};
 
     /// Π(η) = ½ c (η − η*)² along a Newton update whose curvature is off (η* the true
     /// minimiser): −Π′(η) = c (η* − η), g0 = c η*. Closed form, exact to round-off.
@@ -582,45 +484,6 @@ mod tests {
         let eta_star = 1.0 / 1.8;
         let g0 = slope(c, eta_star, 0.0);
         assert!(barrier_descent(1.0, g0, slope(c, eta_star, 1.0), None));
-    }
-
-    /// The barrier at its degenerate zero: E(δ) = c δ³ (the clamped log barrier
-    /// −(d − d̂)² ln(d/d̂) ≈ (d̂ − d)³/d̂ near d̂, δ = d̂ − d), nothing else. Newton's update
-    /// from δ₀ is −E′/E″ = −δ₀/2, so along it δ(η) = δ₀ (1 − η/2) and the potential is
-    /// φ(η) = c δ₀³ (1 − η/2)³ up to η = 2, zero beyond (clamped). Closed form.
-    fn cubic(eta: f64) -> (f64, Option<(f64, f64)>) {
-        let (c, d0): (f64, f64) = (5.0, 0.3);
-        let s = (1.0 - 0.5 * eta).max(0.0);
-        let energy = c * d0.powi(3) * s.powi(3);
-        let dphi = -1.5 * c * d0.powi(3) * s * s;
-        // all of the potential is the contact's: −Π′ = −dphi, the contact's slope dphi
-        (-dphi, Some((energy, dphi)))
-    }
-
-    #[test]
-    fn newton_lands_halfway_at_the_barriers_degenerate_zero_and_the_doubled_step_is_taken() {
-        let g0 = cubic(0.0).0;
-        // where Newton lands the potential still falls at 1/4 of its initial slope
-        let at_one = cubic(1.0);
-        assert!((at_one.0 / g0 - 0.25).abs() < 1e-12);
-        assert!(at_one.0 >= EXTEND_SLOPE * g0);
-        // the doubling to η = 2 reaches the minimum (δ = 0, the force zero) and is taken
-        let at_two = cubic(2.0);
-        assert!(at_two.0.abs() < 1e-15);
-        assert!(extension_descent(1.0, at_one, at_two));
-    }
-
-    #[test]
-    fn an_extension_past_a_regular_minimum_is_refused() {
-        // Π(η) = ½ c (η − η*)², η* = 1.3 (no contact part): from η = 1 (still downhill) to 2
-        // Π rises by ½ c (0.7² − 0.3²) = 0.2 c
-        let (c, eta_star) = (2.0, 1.3);
-        let at = |eta: f64| (slope(c, eta_star, eta), None);
-        assert!(!extension_descent(1.0, at(1.0), at(2.0)));
-        // with the minimum at 1.9 the doubling lowers Π and lands at a gentle uphill slope
-        let eta_star = 1.9;
-        let at = |eta: f64| (slope(c, eta_star, eta), None);
-        assert!(extension_descent(1.0, at(1.0), at(2.0)));
     }
 
     #[test]
