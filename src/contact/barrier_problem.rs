@@ -14,7 +14,7 @@
 
 use super::barrier::{barrier_term, point_edge_region, point_edge_sq_distance, point_edge_toi, point_wall_sq_distance, point_wall_toi, BarrierTerm, PointEdgeRegion, CCD_RESCALING};
 use super::geometry::{unit, Wall};
-use super::search::ContactSearch;
+use super::search::{for_each_swept_pair, ContactSearch};
 use super::Segment;
 
 /// A node closer than d̂ to an edge of another particle.
@@ -452,26 +452,23 @@ impl BarrierContact {
     /// walls from `walls0` to `walls1`, moving along their normals) that keeps every boundary
     /// node off every edge of another particle and in front of every wall, with IPC's
     /// conservative rescaling: [`CCD_RESCALING`] × the first time of impact, 1 when nothing
-    /// meets. The broad phase is conservative: a node and an edge can meet only if their
-    /// distance at `x0` is at most twice the largest motion of a boundary node.
+    /// meets. The broad phase is conservative: a node and an edge can meet only if the boxes
+    /// they sweep overlap ([`for_each_swept_pair`]).
     pub fn collision_free_step(&mut self, x0: &[[f64; 2]], x1: &[[f64; 2]], walls0: &[Wall], walls1: &[Wall]) -> f64 {
-        let mut reach: f64 = 0.0;
-        for &(n, _) in &self.nodes {
-            reach = reach.max((x1[n][0] - x0[n][0]).hypot(x1[n][1] - x0[n][1]));
-        }
+        let moves = self.nodes.iter().any(|&(n, _)| x1[n] != x0[n]);
         let mut toi: f64 = f64::INFINITY;
-        if reach > 0.0 {
-            self.search.update(x0);
-            for (node, s) in self.search.pairs(x0, &self.nodes, 2.0 * reach * (1.0 + 1e-9)) {
-                let seg = self.segments[s];
+        if moves {
+            let segments = &self.segments;
+            for_each_swept_pair(segments, x0, x1, &self.nodes, |node, s| {
+                let seg = segments[s];
                 if self.is_tied(node, seg.body) {
-                    continue;
+                    return;
                 }
                 let [a, b] = seg.nodes;
                 if let Some(t) = point_edge_toi([x0[node], x0[a], x0[b]], [x1[node], x1[a], x1[b]]) {
                     toi = toi.min(t);
                 }
-            }
+            });
         }
         for (w0, w1) in walls0.iter().zip(walls1) {
             let n = unit(w0.normal);

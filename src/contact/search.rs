@@ -229,6 +229,61 @@ impl ContactSearch {
     }
 }
 
+/// The pad of a swept box, relative to its largest coordinate: far above the round-off of the
+/// coordinates and of the time-of-impact test's slack on the edge parameter (1e-12 of the
+/// edge), far below any distance the contact resolves.
+const SWEPT_PAD: f64 = 1e-9;
+
+/// The box of the points `p`, padded by [`SWEPT_PAD`] of their largest coordinate.
+fn swept_box(p: &[[f64; 2]]) -> Aabb {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut size: f64 = 1.0;
+    for q in p {
+        for c in 0..2 {
+            lo[c] = lo[c].min(q[c]);
+            hi[c] = hi[c].max(q[c]);
+            size = size.max(q[c].abs());
+        }
+    }
+    let pad = SWEPT_PAD * size;
+    Aabb::new(to_vec([lo[0] - pad, lo[1] - pad]), to_vec([hi[0] + pad, hi[1] + pad]))
+}
+
+/// Every pair `(slave node, segment index)` of different bodies whose boxes swept by a
+/// straight motion from `x0` to `x1` overlap, each once, handed to `f`: the broad phase of the
+/// continuous collision detection. A node and a segment that meet at some time of the motion
+/// are among them: the node is then in its box (the box of its two positions) and the
+/// segment's point in the hull of its ends, so in its box (the box of its ends' four
+/// positions). The boxes are padded by 1e-9 of their coordinates (round-off).
+///
+/// Unlike a search within the largest motion of any node, the work and memory follow what
+/// each node and segment sweeps: one particle sent far by a soft mode does not make every
+/// pair of the assembly a candidate (which held 15 GB in a 1,024-particle run).
+///
+/// Cost: a hierarchy of the M swept boxes (O(M log M)), then N queries (about O(N log M + K)
+/// for K pairs); no list of pairs is made.
+pub fn for_each_swept_pair(segments: &[Segment], x0: &[[f64; 2]], x1: &[[f64; 2]], slave_nodes: &[(usize, usize)], mut f: impl FnMut(usize, usize)) {
+    if segments.is_empty() || slave_nodes.is_empty() {
+        return;
+    }
+    let bvh = Bvh::from_iter(
+        BvhBuildStrategy::Binned,
+        segments.iter().enumerate().map(|(i, s)| {
+            let [a, b] = s.nodes;
+            (i, swept_box(&[x0[a], x0[b], x1[a], x1[b]]))
+        }),
+    );
+    for &(node, body) in slave_nodes {
+        let q = swept_box(&[x0[node], x1[node]]);
+        for leaf in bvh.intersect_aabb(&q) {
+            let s = leaf as usize;
+            if segments[s].body != body {
+                f(node, s);
+            }
+        }
+    }
+}
+
 /// Exact O(N·M) reference: every `(slave node, segment index)` with `body(node) !=
 /// segment.body` and `point_segment_distance <= distance` (mm), sorted, no duplicates.
 pub fn brute_force_pairs(
