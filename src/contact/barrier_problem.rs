@@ -454,7 +454,7 @@ impl BarrierContact {
     /// conservative rescaling: [`CCD_RESCALING`] × the first time of impact, 1 when nothing
     /// meets. The broad phase is conservative: a node and an edge can meet only if the boxes
     /// they sweep overlap ([`for_each_swept_pair`]).
-    pub fn collision_free_step(&mut self, x0: &[[f64; 2]], x1: &[[f64; 2]], walls0: &[Wall], walls1: &[Wall]) -> f64 {
+    pub fn collision_free_step(&self, x0: &[[f64; 2]], x1: &[[f64; 2]], walls0: &[Wall], walls1: &[Wall]) -> f64 {
         let moves = self.nodes.iter().any(|&(n, _)| x1[n] != x0[n]);
         let mut toi: f64 = f64::INFINITY;
         if moves {

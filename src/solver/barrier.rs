@@ -353,9 +353,8 @@ impl Simulation {
         let x0 = self.coords(u);
         let moved: Vec<f64> = u.iter().zip(du).map(|(a, b)| a + b).collect();
         let x1 = self.coords(&moved);
-        let Some(b) = self.barrier.as_mut() else { return 1.0 };
-        let (w0, w1) = (b.walls_at(b.alpha), b.walls1.clone());
-        b.contact.collision_free_step(&x0, &x1, &w0, &w1)
+        let Some(b) = self.barrier.as_ref() else { return 1.0 };
+        b.contact.collision_free_step(&x0, &x1, &b.walls_at(b.alpha), &b.walls1)
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged
