@@ -30,6 +30,12 @@ const JOB: &str = "jobs/compaction/discs_2x2_biaxial.toml";
 
 struct Run {
     reports: Vec<StepReport>,
+    /// The step size each step was tried at (the step-size control's choice after the step
+    /// before; the first: `[time] dt`), beside `reports`.
+    tried: Vec<f64>,
+    growth: f64,
+    dt_max: f64,
+    easy_iterations: usize,
     stop: String,
     crossings: usize,
     inverted: usize,
@@ -58,10 +64,13 @@ fn run(text: &str) -> Run {
     let model = Model::from_case(&c).unwrap();
     let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
     let mut reports = Vec::new();
+    let mut tried = vec![c.time.dt];
+    let (growth, dt_max, easy_iterations) = (sim.time.growth, sim.time.dt_max, sim.time.easy_iterations);
     let (mut crossings, mut inverted, mut ties, mut tie_gap) = (0, 0, 0, 0.0f64);
     let summary = sim
         .run(&mut |s, r| {
             reports.push(r.clone());
+            tried.push(s.next_dt());
             crossings += s.barrier_crossings().unwrap_or(0);
             inverted += inverted_elements(&s.model, &s.coords(&s.sol.u));
             if let Some((n, gap)) = s.barrier_ties() {
@@ -69,7 +78,39 @@ fn run(text: &str) -> Run {
             }
         })
         .unwrap();
-    Run { reports, stop: summary.stop_reason, crossings, inverted, ties, tie_gap }
+    tried.truncate(reports.len());
+    Run { reports, tried, growth, dt_max, easy_iterations, stop: summary.stop_reason, crossings, inverted, ties, tie_gap }
+}
+
+/// The step-size control as `Simulation::step_easy` states it, checked on every step of a run
+/// that was not shortened to land on the stop solid ratio: a step that converged at the size
+/// it was tried grows the next one by `[time] growth` (up to `dt_max`) when it converged
+/// without a retry in at most `easy_iterations` Newton iterations, or in the one retry that
+/// descends on the potential (one cut-back counted, the size kept) in at most
+/// `DESCENT_ITERATIONS` = 4 times as many; every other step keeps its size. Returns how many
+/// steps grew after the descending retry, so that a caller can tell the check was not vacuous.
+/// (These discs are frictionless and compressible: a step's iterations are those of its one
+/// solve.)
+fn check_step_growth(run: &Run) -> usize {
+    let mut grown_after_retry = 0;
+    for (k, r) in run.reports.iter().enumerate().take(run.reports.len() - 1) {
+        let at_size = r.dt == run.tried[k];
+        if !at_size {
+            // cut back, or shortened to land on the stop solid ratio
+            continue;
+        }
+        let easy = match r.cutbacks {
+            0 => r.newton_iterations <= run.easy_iterations,
+            1 => r.newton_iterations <= 4 * run.easy_iterations,
+            _ => false,
+        };
+        let expected = if easy { (r.dt * run.growth).min(run.dt_max) } else { r.dt };
+        assert!((run.tried[k + 1] / expected - 1.0).abs() < 1e-12, "step {} ({} iterations, {} cut-backs at dt {}): the next step tried {}, expected {}", r.step, r.newton_iterations, r.cutbacks, r.dt, run.tried[k + 1], expected);
+        if easy && r.cutbacks == 1 {
+            grown_after_retry += 1;
+        }
+    }
+    grown_after_retry
 }
 
 /// The four wall pressures (left, right, bottom, top; MPa) at solid ratio `phi`.
@@ -113,6 +154,7 @@ fn biaxial_discs_compact_with_the_barrier() {
     let share = last.stabilisation_energy / last.external_work;
     assert!(share <= 0.01, "the springs took {:.2} % of the wall work", 100.0 * share);
     let p_bar = pressures_at(&barrier.reports, 0.95);
+    let grown = check_step_growth(&barrier);
 
     // d̂ halved: the default is h/20 with h the smallest element size of the particles
     let c = case::parse(&barrier_text, Path::new("jobs/compaction")).unwrap();
@@ -123,6 +165,8 @@ fn biaxial_discs_compact_with_the_barrier() {
     assert_eq!(halved.stop, "solid ratio reached");
     assert_eq!(halved.crossings + halved.inverted, 0);
     let p_half = pressures_at(&halved.reports, 0.95);
+    let grown = grown + check_step_growth(&halved);
+    assert!(grown > 0, "no step converged in the descending retry at its size grew the next one: the check above saw none");
     let (m_bar, m_half) = (mean_pressures(&barrier.reports, 0.93, 0.95), mean_pressures(&halved.reports, 0.93, 0.95));
 
     eprintln!("pressures at solid ratio 0.95 (left, right, bottom, top; MPa):");

@@ -36,6 +36,12 @@ const PROJECT: bool = false;
 /// step before the pairs' Hessians are projected instead ([`Simulation::factor_descent`]).
 const SMALL_SHIFT: f64 = 1e-4;
 
+/// How many times `[solver] max_iterations` the retry of a failed step gets, descending on the
+/// potential ([`Simulation::factor_descent`]): leaving a saddle by descent is progress the
+/// residual does not show (it grows while the iterate slides off). A step that converged in
+/// that retry at its size counts as easy with as many times `[time] easy_iterations`.
+pub const DESCENT_ITERATIONS: usize = 4;
+
 /// The barrier contact of a simulation and its state within a step.
 #[derive(Debug)]
 pub(super) struct BarrierRun {

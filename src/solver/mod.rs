@@ -422,6 +422,13 @@ impl Simulation {
         self.run.step
     }
 
+    /// The step size the next step of [`Simulation::run`] tries (s; shortened only to end on
+    /// the end time or the stop solid ratio): after a converged step, what the step-size
+    /// control chose.
+    pub fn next_dt(&self) -> f64 {
+        self.run.next_dt
+    }
+
     /// The report of the last converged step of [`Simulation::run`] (kept in a checkpoint).
     pub fn last_report(&self) -> Option<&StepReport> {
         self.run.last_report.as_ref()

@@ -183,8 +183,8 @@ impl Simulation {
         let mut last_update = f64::INFINITY;
         // the retry of a failed barrier step descends on the potential, and leaving a saddle
         // that way is progress the residual does not show (it grows while the iterate slides
-        // off): it gets four times the iterations
-        let max_iterations = if self.barrier.as_ref().is_some_and(|b| b.descent) { 4 * self.spec.max_iterations } else { self.spec.max_iterations };
+        // off): it gets more iterations
+        let max_iterations = if self.barrier.as_ref().is_some_and(|b| b.descent) { super::barrier::DESCENT_ITERATIONS * self.spec.max_iterations } else { self.spec.max_iterations };
         for k in 0..=max_iterations {
             let reference = self.reference_force();
             let rel = rnorm / reference;
