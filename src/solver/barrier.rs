@@ -36,6 +36,17 @@ const PROJECT: bool = false;
 /// step before the pairs' Hessians are projected instead ([`Simulation::factor_descent`]).
 const SMALL_SHIFT: f64 = 1e-4;
 
+/// The smallest relative shift τ tried ([`Simulation::shift_until_definite`]). The shift adds
+/// τ s_i to every diagonal entry, also those of the particles that nothing but the
+/// stabilisation springs hold (ζ = 1e-7 of the elements' stiffness): where τ s_i is larger
+/// than a particle's own stiffness, Newton moves it by only the fraction k / (k + τ s) of the
+/// way to its equilibrium an iteration. Starting the shifts at 1e-6 held the retries of
+/// robustness case 12 (256 polygons) for 40–80 iterations on one loose particle each,
+/// converging by 2.5 % an iteration or sliding off a saddle by 0.6 % an iteration; from 1e-10
+/// the same run to solid ratio 0.82 took 10 steps and 401 iterations instead of 19 and 773
+/// (docs/robustness.md, eleventh measurement).
+const SHIFT_MIN: f64 = 1e-10;
+
 /// How many times `[solver] max_iterations` the retry of a failed step gets, descending on the
 /// potential ([`Simulation::factor_descent`]): leaving a saddle by descent is progress the
 /// residual does not show (it grows while the iterate slides off). A step that converged in
@@ -88,8 +99,16 @@ pub(super) struct BarrierRun {
     /// Descend on the incremental potential in this step's solves: an indefinite tangent is
     /// made definite by a small diagonal shift, else by projecting its pair Hessians onto the
     /// PSD matrices, else by a larger shift ([`Simulation::factor_descent`]); the solve gets
-    /// four times the iterations. On in the retry of a step that failed without.
+    /// four times the iterations. On in the retry of a step that failed without, and from then
+    /// on for the rest of the run: in a rearranging packing nearly every first attempt with
+    /// the exact tangent fails once one has (robustness case 12: every one from its fifth step
+    /// on, 25 iterations each), and where the tangent is definite the descent's solve is
+    /// Newton's own.
     pub descent: bool,
+    /// The relative shift τ that last made the tangent definite in this attempt at a step
+    /// (0: none yet): the next indefinite tangent's shifts start a tenth of it
+    /// ([`Simulation::shift_until_definite`]).
+    pub shift: f64,
 }
 
 /// The stiffness of a tie relative to the softest particle's Young's modulus: k = 100 E
@@ -119,7 +138,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0 }
     }
 
     /// The round-off of the ties' forces, after ties were made.
@@ -152,7 +171,7 @@ impl BarrierRun {
 
     /// The state a checkpoint keeps ([`BarrierState`]).
     pub fn state(&self) -> BarrierState {
-        BarrierState { kappa: self.contact.kappa, min_distance: self.min_distance, ties: self.contact.ties.clone(), tied: self.contact.tied.clone() }
+        BarrierState { kappa: self.contact.kappa, min_distance: self.min_distance, ties: self.contact.ties.clone(), tied: self.contact.tied.clone(), descent: self.descent }
     }
 
     /// Whether any contact has friction.
@@ -202,6 +221,7 @@ impl Simulation {
         b.walls0 = walls0;
         b.walls1 = walls1;
         b.alpha = if dt > 0.0 { 0.0 } else { 1.0 };
+        b.shift = 0.0;
         let reach = b.contact.dhat + if h.is_finite() { h } else { 0.0 };
         // the ties' multipliers as the last converged step left them
         for t in &mut b.contact.ties {
@@ -527,7 +547,7 @@ impl Simulation {
     /// the Cholesky factorisation finds indefinite, or that fails to factor outright, is made
     /// definite in three stages, each tried only when the one before did not do it:
     /// 1. a small shift of the diagonal (Levenberg–Marquardt, [`Simulation::shift_until_definite`]
-    ///    up to τ = [`SMALL_SHIFT`]), which changes the update little;
+    ///    from τ = [`SHIFT_MIN`] up to τ = [`SMALL_SHIFT`]), which changes the update little;
     /// 2. each barrier pair's Hessian replaced by its projection onto the PSD matrices
     ///    ([`Simulation::project_pair_hessians`]): a node facing another particle's corner
     ///    has a negative curvature of the order of its force over the gap for sliding past
@@ -547,9 +567,11 @@ impl Simulation {
     /// unchanged, so is the solution. On several processes the solving one's finding is
     /// broadcast, so that all take the same shifts.
     ///
-    /// Only the retry descends: shifting in every step changes which branch a symmetric
-    /// assembly takes where it bifurcates (the 2 × 2 biaxial discs then stiffen earlier and
-    /// miss the penalty method's pressure at 0.95 by 5.8 %, `tests/barrier_compaction.rs`).
+    /// The descent starts with the retry of the first step that fails without it (and stays
+    /// on from then, [`BarrierRun::descent`]): shifting from the first step changed which
+    /// branch a symmetric assembly takes where it bifurcates (the 2 × 2 biaxial discs then
+    /// stiffened earlier and missed the penalty method's pressure at 0.95 by 5.8 %,
+    /// `tests/barrier_compaction.rs`, measured with the shifts starting at τ = 1e-6).
     pub(super) fn factor_descent(&mut self) -> Result<(), NewtonFailure> {
         let descent = self.barrier.as_ref().is_some_and(|b| b.descent);
         let first = self.factor();
@@ -561,15 +583,27 @@ impl Simulation {
             Ok(()) if !descent || !self.tangent_indefinite() => return Ok(()),
             Ok(()) => {}
         }
-        if self.shift_until_definite(SMALL_SHIFT) {
-            return Ok(());
+        let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
+        let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
+        match self.shift_until_definite(start, SMALL_SHIFT) {
+            Some(tau) => {
+                if let Some(b) = self.barrier.as_mut() {
+                    b.shift = tau;
+                }
+                return Ok(());
+            }
+            None => {
+                if let Some(b) = self.barrier.as_mut() {
+                    b.shift = SMALL_SHIFT;
+                }
+            }
         }
         self.project_pair_hessians();
         if self.factor().is_ok() && !self.tangent_indefinite() {
             tracing::debug!("indefinite tangent made definite by projecting the pairs' Hessians");
             return Ok(());
         }
-        if self.shift_until_definite(1.0) {
+        if self.shift_until_definite(1e-6, 1.0).is_some() {
             return Ok(());
         }
         tracing::debug!("indefinite tangent kept: neither the projection nor a shift made it definite");
@@ -601,17 +635,22 @@ impl Simulation {
     }
 
     /// Raise each diagonal entry of the tangent by τ s_i, s_i twice the absolute sum of its
-    /// row, τ = 1e-6, 1e-5, … up to `tau_max`, until the Cholesky factorisation finds it
-    /// positive definite: true then (the shifted diagonal stays in the tangent, factored);
-    /// false with the diagonal restored (and the tangent to be factored again) otherwise. At
-    /// τ = 1 Gershgorin's theorem makes the matrix positive definite.
+    /// row, τ = `start`, 10 `start`, … up to `tau_max`, until the Cholesky factorisation finds
+    /// it positive definite: that τ then (the shifted diagonal stays in the tangent,
+    /// factored); None with the diagonal restored (and the tangent to be factored again)
+    /// otherwise. At τ = 1 Gershgorin's theorem makes the matrix positive definite.
+    ///
+    /// The first shift of an attempt at a step starts at [`SHIFT_MIN`] and the next ones at a
+    /// tenth of the last that worked (Levenberg–Marquardt's update of its damping): each τ
+    /// tried costs a factorisation, and the iterations of a retry mostly need about the same
+    /// τ, while a smaller one that suffices keeps the loose particles' updates whole.
     ///
     /// The row sum, not |K_ii|: on the asphalt octagons of 5.2.1 (ν = 0.5, creep) nodes facing
     /// nodes at gaps of d̂/250 have a negative curvature of the order of the contact force over
     /// the gap, 400 times the elements' stiffness, and a diagonal entry that is itself near
     /// zero; raising it by |K_ii| left the tangent indefinite at τ = 1 (and a zero pivot of the
     /// indefinite fallback failed the step outright, measured).
-    fn shift_until_definite(&mut self, tau_max: f64) -> bool {
+    fn shift_until_definite(&mut self, start: f64, tau_max: f64) -> Option<f64> {
         let pos = self.sys.kk.diagonal_positions();
         let d0: Vec<f64> = pos.iter().map(|p| p.map_or(0.0, |p| self.sys.kk.values[p])).collect();
         // each diagonal entry is raised by τ times twice its row's absolute sum: at τ = 1 the
@@ -620,7 +659,7 @@ impl Simulation {
         // barrier pair's negative curvature for sliding past a corner)
         let kk = &self.sys.kk;
         let scale: Vec<f64> = (0..pos.len()).map(|i| 2.0 * kk.values[kk.row_ptr[i]..kk.row_ptr[i + 1]].iter().map(|v| v.abs()).sum::<f64>()).collect();
-        let mut tau = 1e-6;
+        let mut tau = start;
         while tau <= tau_max * (1.0 + 1e-9) {
             for ((p, d), s) in pos.iter().zip(&d0).zip(&scale) {
                 if let Some(p) = *p {
@@ -629,7 +668,7 @@ impl Simulation {
             }
             if self.factor().is_ok() && !self.tangent_indefinite() {
                 tracing::debug!(tau, "indefinite tangent shifted");
-                return true;
+                return Some(tau);
             }
             tau *= 10.0;
         }
@@ -638,7 +677,7 @@ impl Simulation {
                 self.sys.kk.values[p] = *d;
             }
         }
-        false
+        None
     }
 
     /// Whether the last factorisation found the tangent indefinite (the solving process's
@@ -669,6 +708,7 @@ impl Simulation {
         b.min_distance = state.min_distance;
         b.contact.ties = state.ties;
         b.contact.tied = state.tied;
+        b.descent = state.descent;
         b.update_tie_floor();
         b.walls0.clone_from(&walls);
         b.walls1 = walls;

@@ -499,6 +499,13 @@ impl Simulation {
         self.barrier.as_ref().map(|b| (b.eval.min_distance, b.contact.dhat))
     }
 
+    /// With the barrier: whether the next step starts descending on the incremental
+    /// potential (on for good once a step has needed the retry that does,
+    /// `BarrierRun::descent`). False without the barrier.
+    pub fn barrier_descends(&self) -> bool {
+        self.barrier.as_ref().is_some_and(|b| b.descent)
+    }
+
     /// With the barrier's ties (cohering particles): how many ties hold, and the largest gap
     /// of a tie in the committed state (mm; see [`crate::contact::barrier_problem::Tie`]).
     /// None without the barrier.

@@ -47,7 +47,8 @@ pub struct SimScalars {
 
 /// What of the barrier contact changes over a run and is not rebuilt from the model: κ after
 /// its doublings, the smallest distance of the last converged step (the next doubling
-/// compares with it), and the ties of cohering particles with their multipliers. The last
+/// compares with it), the ties of cohering particles with their multipliers, and whether the
+/// steps descend on the potential from their start (after a step that needed it). The last
 /// evaluation of the barrier, from which the next step lags its friction and picks the
 /// springs' directions, is recomputed at the converged state on a restart.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -56,6 +57,10 @@ pub struct BarrierState {
     pub min_distance: f64,
     pub ties: Vec<crate::contact::barrier_problem::Tie>,
     pub tied: Vec<(usize, usize)>,
+    /// Whether the next step starts descending on the potential (absent from older
+    /// checkpoints: no).
+    #[serde(default)]
+    pub descent: bool,
 }
 
 /// The state of a simulation between two steps that is not rebuilt from its model

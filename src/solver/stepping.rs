@@ -163,6 +163,8 @@ impl Simulation {
         // step), then those whose mesh crosses the quality limits after the step
         let mut remeshes = 0;
         let mut remesh_tried = false;
+        // whether the step starts descending on the potential (after a step that needed it)
+        let sticky = self.barrier.as_ref().is_some_and(|b| b.descent);
         loop {
             if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
                 c.restore(snap.clone());
@@ -195,11 +197,10 @@ impl Simulation {
                 Ok(trial) => {
                     self.springs.all = false;
                     self.springs.viscous = false;
+                    // (with the barrier, the descent stays on for the steps after one that
+                    // needed it: `BarrierRun::descent`)
                     let descended = self.barrier.as_ref().is_some_and(|b| b.descent);
-                    if let Some(b) = self.barrier.as_mut() {
-                        b.descent = false;
-                    }
-                    let easy = self.step_easy(&trial, cutbacks, descended && dt_try == dt);
+                    let easy = self.step_easy(&trial, cutbacks, descended && dt_try == dt && cutbacks == usize::from(!sticky));
                     let mut report = self.commit(dt_try, trial, cutbacks);
                     self.run.last_step_easy = easy;
                     remeshes += self.remesh_after_step();
@@ -254,20 +255,20 @@ impl Simulation {
     /// 1–3 iterations each; counting them held a frictional run at its smallest step size for
     /// good: robustness case 02 took 475 steps with this rule against 599 without, measured).
     ///
-    /// With the barrier, a step whose first attempt failed and whose retry at the same size,
-    /// descending on the potential, converged (`descended_at_size`) counts by that retry, with
-    /// [`super::barrier::DESCENT_ITERATIONS`] times the iterations, as the retry has that many
-    /// times the budget: the size was not what failed. Counted as a cut-back instead, it held
-    /// every later step at the size of the last real cut-back, since in a rearranging packing
-    /// nearly every first attempt fails (the 256 polygons of robustness case 12 at 0.0075 s
-    /// for good, their 1,024 at 0.005 s, against a `dt_max` of 0.05 s).
+    /// With the barrier, a step that converged descending on the potential at the size it was
+    /// tried (`descended_at_size`: from its start, the descent being on since an earlier
+    /// step, or in the retry after its first attempt failed) counts with
+    /// [`super::barrier::DESCENT_ITERATIONS`] times the iterations, as the descent has that
+    /// many times the budget: the size was not what failed. Counted as a cut-back instead,
+    /// the retry held every later step at the size of the last real cut-back, since in a
+    /// rearranging packing nearly every first attempt fails (the 256 polygons of robustness
+    /// case 12 at 0.0075 s for good, their 1,024 at 0.005 s, against a `dt_max` of 0.05 s).
     fn step_easy(&self, trial: &Trial, cutbacks: usize, descended_at_size: bool) -> bool {
         let counted = if self.barrier.is_some() { trial.first_iterations } else { trial.iterations };
-        match cutbacks {
-            0 => counted <= self.time.easy_iterations,
-            1 if descended_at_size => counted <= super::barrier::DESCENT_ITERATIONS * self.time.easy_iterations,
-            _ => false,
+        if descended_at_size {
+            return counted <= super::barrier::DESCENT_ITERATIONS * self.time.easy_iterations;
         }
+        cutbacks == 0 && counted <= self.time.easy_iterations
     }
 
     /// Contact pairs for a solve that ends at `sol.time + dt` (frozen during its Newton
