@@ -45,7 +45,7 @@ enum Command {
         /// Output directory for history.csv, summary.json, results.h5 and results.xdmf.
         #[arg(short, long, default_value = "out")]
         out: PathBuf,
-        /// Threads for assembly and factorisation (overrides [solver] threads; 0 = all cores).
+        /// Threads for the assembly (overrides [solver] threads; 0 = all cores; the sparse direct factorisations run on one).
         #[arg(long)]
         threads: Option<usize>,
         /// No progress bar.

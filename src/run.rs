@@ -96,7 +96,8 @@ impl Progress<'_> {
 pub struct RunOptions {
     /// Output folder for history.csv, summary.json, results.h5, results.xdmf, checkpoint.h5.
     pub out: PathBuf,
-    /// Threads for assembly and factorisation (overrides `[solver] threads`; 0 = all cores).
+    /// Threads for the assembly (overrides `[solver] threads`; 0 = all cores; the sparse direct
+    /// factorisations run on one).
     pub threads: Option<usize>,
     /// No progress: [`Reporter::steps_begin`], [`Reporter::step`], [`Reporter::steps_end`]
     /// are not called (the other lines are).

@@ -85,7 +85,8 @@ pub struct SolverOptions {
     /// Relative residual tolerance of PCG, ‖b − Ax‖ / ‖b‖.
     pub pcg_tol: f64,
     pub pcg_max_iterations: usize,
-    /// Threads for the numeric factorisation (1 = sequential).
+    /// Threads of the Schwarz preconditioner (1 = sequential); the direct factorisations run
+    /// on one whatever this says ([`make_solver_with`]).
     pub threads: usize,
     /// Fill-reducing ordering of the sparse Cholesky factorisation (LU always uses COLAMD).
     pub ordering: direct::FillOrdering,
@@ -172,8 +173,16 @@ pub fn make_solver_with(
             let s = schwarz::SchwarzPcg::new(subdomains, comm, opts.pcg_tol, opts.pcg_max_iterations, opts.threads);
             Box::new(if opts.symmetric { s } else { s.unsymmetric() })
         }
-        LinearSolverKind::Lu => Box::new(direct::FaerLu::new(opts.threads)),
-        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(opts.threads).with_ordering(opts.ordering)),
+        // the sparse direct factorisations and solves run on one thread whatever `threads`
+        // says (the threads assemble): faer's parallel kernels were slower on this 2-core
+        // machine wherever measured — 1.4–1.5 times on a 205 k-unknown tangent (`cargo bench
+        // --bench solve -- solve_205k_threads`), 2.5 times on the dense steps of robustness
+        // case 12 (256 polygons, 29 k unknowns, even called from inside the run's pool; from
+        // outside it 4.3 times, most of it system time), the same on case 13's loose start
+        // (1,024 polygons, docs/robustness.md, eleventh measurement) — and one thread makes a
+        // run's path the same on any number of them
+        LinearSolverKind::Lu => Box::new(direct::FaerLu::new(1)),
+        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(1).with_ordering(opts.ordering)),
         LinearSolverKind::Pcg => Box::new(pcg::Pcg::new(
             opts.preconditioner,
             opts.pcg_tol,
