@@ -405,7 +405,8 @@ fn two_threads_match_one_thread() {
         let d = rel_err(&x2, &x1);
         assert!(d <= 1e-12, "Cholesky {structure:?}: threads 2 vs 1 differ by {d:e}");
     }
-    // Through the options.
+    // Through the options (which factorise on one thread whatever `threads` says: the run's
+    // threads assemble, `linalg::make_solver_with`).
     let b = rhs_of(&spd, &xs);
     let opts = SolverOptions { kind: LinearSolverKind::Cholesky, threads: 2, ..Default::default() };
     let (x, st) = run(make_solver(&opts).as_mut(), &spd, &b).unwrap();
