@@ -145,8 +145,9 @@ fn restart_from_a_periodic_checkpoint_is_bit_for_bit() {
 }
 
 /// The barrier keeps state a model does not rebuild: κ after its doublings, the smallest
-/// distance the next doubling compares with, and the ties of cohering particles with their
-/// multipliers. 2 × 2 J2 discs, biaxial, with the barrier: once with friction μ = 0.2 (lagged
+/// distance the next doubling compares with, the ties of cohering particles with their
+/// multipliers, and whether the steps descend on the potential from their start. 2 × 2 J2
+/// discs, biaxial, with the barrier: once with friction μ = 0.2 (lagged
 /// at each step's start from the converged state) and once cohering, a checkpoint every 13
 /// steps. The checkpoint holds the barrier's state (cohering: with its ties); the restart from
 /// it equals the uninterrupted run bit for bit. (κ does not double in these runs: the default
@@ -174,6 +175,10 @@ fn barrier_restart_is_bit_for_bit() {
         let saved = Checkpoint::read(&a).unwrap().state.scalars.barrier.expect("barrier state in the checkpoint");
         assert!(saved.kappa >= start.kappa, "{kind}: κ {} at the checkpoint, {} at the start", saved.kappa, start.kappa);
         assert!(saved.min_distance.is_finite(), "{kind}: smallest distance {}", saved.min_distance);
+        // a step before the checkpoint needed the retry that descends on the potential (step 8
+        // rubbing, 9 cohering), so the descent is on for the rest of the run, and the restart
+        // must start its first step with it
+        assert!(saved.descent, "{kind}: the descent is off at the checkpoint");
         if kind == "cohering" {
             assert!(!saved.ties.is_empty() && !saved.tied.is_empty(), "cohering: no ties at the checkpoint");
         }
