@@ -585,18 +585,13 @@ impl Simulation {
         }
         let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
         let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
-        match self.shift_until_definite(start, SMALL_SHIFT) {
-            Some(tau) => {
-                if let Some(b) = self.barrier.as_mut() {
-                    b.shift = tau;
-                }
-                return Ok(());
-            }
-            None => {
-                if let Some(b) = self.barrier.as_mut() {
-                    b.shift = SMALL_SHIFT;
-                }
-            }
+        let shifted = self.shift_until_definite(start, SMALL_SHIFT);
+        if let Some(b) = self.barrier.as_mut() {
+            // (after a shift that did not do it, the next tangent's shifts start near its top)
+            b.shift = shifted.unwrap_or(SMALL_SHIFT);
+        }
+        if shifted.is_some() {
+            return Ok(());
         }
         self.project_pair_hessians();
         if self.factor().is_ok() && !self.tangent_indefinite() {
