@@ -349,6 +349,41 @@ fn cholesky_reports_whether_the_matrix_is_definite() {
     assert_eq!(pcg.definite(), None);
 }
 
+/// `LinearSolver::factor_definite` (the probe of the barrier's descent): on the Laplacian it
+/// factors and the solve is exact (to the residual tolerance of this file); on the shifted
+/// Laplacian (eigenvalues on both sides of 0) it answers false and holds no factorisation, so
+/// a solve is refused instead of using a stale or indefinite one; the plain `factor` of the same
+/// matrix still falls back to an indefinite factorisation. Solvers that cannot tell (LU) factor
+/// and answer true.
+#[test]
+fn factor_definite_factors_definite_matrices_only() {
+    let spd = laplacian(20);
+    let xs = x_star(spd.nrows);
+    let b = rhs_of(&spd, &xs);
+    let indefinite = conv_diff(20, 0.0, 0.0, 1.2345);
+    for structure in [FactorStructure::Simplicial, FactorStructure::Supernodal] {
+        let mut s = FaerCholesky::new(1).with_structure(structure);
+        assert!(s.factor_definite(&spd).unwrap(), "Laplacian, {structure:?}");
+        assert_eq!(s.definite(), Some(true));
+        let mut x = vec![0.0; spd.nrows];
+        let st = s.solve(&spd, &b, &mut x).unwrap();
+        check_solution(&spd, &x, &xs, &b, &st, &format!("factor_definite, {structure:?}"));
+        // the same pattern with indefinite values: refused, and nothing to solve with
+        assert!(!s.factor_definite(&indefinite).unwrap(), "shifted Laplacian, {structure:?}");
+        assert_eq!(s.definite(), None, "no factorisation held after a refused probe");
+        assert!(s.solve(&indefinite, &b, &mut x).is_err(), "a solve after a refused probe is an error");
+        if s.factor(&indefinite).is_ok() {
+            assert_eq!(s.definite(), Some(false), "the plain factorisation falls back, {structure:?}");
+        }
+    }
+    let mut lu = FaerLu::new(1);
+    assert!(lu.factor_definite(&indefinite).unwrap(), "LU cannot tell: it factors and answers true");
+    let mut x = vec![0.0; spd.nrows];
+    let bi = rhs_of(&indefinite, &xs);
+    let st = lu.solve(&indefinite, &bi, &mut x).unwrap();
+    check_solution(&indefinite, &x, &xs, &bi, &st, "LU after factor_definite");
+}
+
 #[test]
 fn cholesky_on_saddle_point_matrix_does_not_panic() {
     // [[K, Bᵀ], [B, 0]]: zero diagonal block, needs pivoting. Either a correct answer or Singular.

@@ -318,6 +318,11 @@ trait Factorisation {
     fn definite(&self) -> Option<bool> {
         None
     }
+    /// [`LinearSolver::factor_definite`]: by default the factorisation and its answer.
+    fn factor_definite(&mut self, a: &CsrMatrix, n: usize, par: Par, mem: &mut MemBuffer) -> Result<bool, LinalgError> {
+        self.factor(a, n, par, mem)?;
+        Ok(self.definite() != Some(false))
+    }
 }
 
 /// A faer sparse direct solver: the factorisation `F` ([`LuFactors`] or [`CholeskyFactors`])
@@ -425,6 +430,14 @@ impl<F: Factorisation + Send> LinearSolver for FaerDirect<F> {
         self.fact.factor(a, self.n, self.par, &mut self.mem)?;
         self.factored = true;
         Ok(())
+    }
+
+    fn factor_definite(&mut self, a: &CsrMatrix) -> Result<bool, LinalgError> {
+        self.analyze(a)?;
+        self.factored = false;
+        let definite = self.fact.factor_definite(a, self.n, self.par, &mut self.mem)?;
+        self.factored = definite;
+        Ok(definite)
     }
 
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
@@ -609,6 +622,27 @@ impl FaerDirect<CholeskyFactors> {
     }
 }
 
+impl CholeskyFactors {
+    /// The LLᵀ factorisation of `a`: None when it succeeded (the factors are held), else the
+    /// index of the first pivot that was not positive (nothing usable is held).
+    fn llt(&mut self, a: &CsrMatrix, par: Par, mem: &mut MemBuffer) -> Result<Option<usize>, LinalgError> {
+        self.kind = None;
+        if let Some(k) = a.values.iter().position(|v| !v.is_finite()) {
+            return Err(LinalgError::Other(format!("matrix entry {k} is not finite")));
+        }
+        let symbolic = self.symbolic.as_ref().expect("analysed");
+        let mat = SparseColMatRef::new(csr_as_csc(a), &a.values);
+        let llt = symbolic.factorize_numeric_llt(&mut self.l_values, mat, Side::Lower, Default::default(), par, MemStack::new(mem), Default::default());
+        match llt {
+            Ok(_) => {
+                self.kind = Some(CholeskyKind::Llt);
+                Ok(None)
+            }
+            Err(DenseLltError::NonPositivePivot { index }) => Ok(Some(index)),
+        }
+    }
+}
+
 /// The CSR arrays of `a` seen as a CSC matrix (that is Aᵀ = A for a symmetric matrix).
 fn csr_as_csc(a: &CsrMatrix) -> SymbolicSparseColMatRef<'_, usize> {
     SymbolicSparseColMatRef::new_checked(a.nrows, a.ncols, &a.row_ptr, None, &a.col_idx)
@@ -644,30 +678,14 @@ impl Factorisation for CholeskyFactors {
         Ok(req)
     }
 
+    fn factor_definite(&mut self, a: &CsrMatrix, _n: usize, par: Par, mem: &mut MemBuffer) -> Result<bool, LinalgError> {
+        Ok(self.llt(a, par, mem)?.is_none())
+    }
+
     fn factor(&mut self, a: &CsrMatrix, _n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError> {
-        self.kind = None;
-        if let Some(k) = a.values.iter().position(|v| !v.is_finite()) {
-            return Err(LinalgError::Other(format!("matrix entry {k} is not finite")));
-        }
+        let Some(llt_pivot) = self.llt(a, par, mem)? else { return Ok(()) };
         let symbolic = self.symbolic.as_ref().expect("analysed");
         let mat = SparseColMatRef::new(csr_as_csc(a), &a.values);
-
-        let llt = symbolic.factorize_numeric_llt(
-            &mut self.l_values,
-            mat,
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(mem),
-            Default::default(),
-        );
-        let llt_pivot = match llt {
-            Ok(_) => {
-                self.kind = Some(CholeskyKind::Llt);
-                return Ok(());
-            }
-            Err(DenseLltError::NonPositivePivot { index }) => index,
-        };
 
         // Not positive definite: Bunch–Kaufman LBLᵀ inside supernodes (faer only offers it on the
         // supernodal structure; on the simplicial one it would be a plain LDLᵀ without error

@@ -126,6 +126,15 @@ pub trait LinearSolver: Send {
     fn definite(&self) -> Option<bool> {
         None
     }
+    /// Factor `a` only if it is positive definite: true when it is (factored, ready to solve),
+    /// false when it is not (nothing usable is held; a Cholesky solver then skips the indefinite
+    /// factorisation [`LinearSolver::factor`] would fall back to). For a caller that makes an
+    /// indefinite matrix definite before it solves (the barrier's descent), which needs only
+    /// the answer. Solvers that cannot tell factor as usual and answer true.
+    fn factor_definite(&mut self, a: &CsrMatrix) -> Result<bool, LinalgError> {
+        self.factor(a)?;
+        Ok(self.definite() != Some(false))
+    }
 }
 
 /// `a` is square and its CSR arrays are consistent (what every `analyze` checks first).

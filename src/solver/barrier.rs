@@ -574,14 +574,15 @@ impl Simulation {
     /// `tests/barrier_compaction.rs`, measured with the shifts starting at τ = 1e-6).
     pub(super) fn factor_descent(&mut self) -> Result<(), NewtonFailure> {
         let descent = self.barrier.as_ref().is_some_and(|b| b.descent);
-        let first = self.factor();
-        match first {
-            Err(e) if !descent => return Err(e),
-            // a factorisation that fails outright (a zero pivot of the indefinite fallback)
-            // is shifted as an indefinite one is
-            Err(_) => {}
-            Ok(()) if !descent || !self.tangent_indefinite() => return Ok(()),
-            Ok(()) => {}
+        if !descent {
+            return self.factor();
+        }
+        // (each stage asks only whether the matrix it tries is definite: an LLᵀ factorisation
+        // that stops at the first pivot that is not positive, without the indefinite fallback
+        // of `factor`, which the descent never solves with; a factorisation that fails
+        // outright is shifted as an indefinite one is)
+        if self.factor_definite() {
+            return Ok(());
         }
         let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
         let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
@@ -594,7 +595,7 @@ impl Simulation {
             return Ok(());
         }
         self.project_pair_hessians();
-        if self.factor().is_ok() && !self.tangent_indefinite() {
+        if self.factor_definite() {
             tracing::debug!("indefinite tangent made definite by projecting the pairs' Hessians");
             return Ok(());
         }
@@ -661,7 +662,7 @@ impl Simulation {
                     self.sys.kk.values[p] = d + tau * s;
                 }
             }
-            if self.factor().is_ok() && !self.tangent_indefinite() {
+            if self.factor_definite() {
                 tracing::debug!(tau, "indefinite tangent shifted");
                 return Some(tau);
             }
@@ -673,17 +674,6 @@ impl Simulation {
             }
         }
         None
-    }
-
-    /// Whether the last factorisation found the tangent indefinite (the solving process's
-    /// answer, on every process).
-    fn tangent_indefinite(&self) -> bool {
-        let sys = &self.sys;
-        let mut flag = [if sys.solves_here() && sys.linear.definite() == Some(false) { 1.0 } else { 0.0 }];
-        if sys.par.is_some() {
-            sys.comm.broadcast(&mut flag);
-        }
-        flag[0] > 0.5
     }
 
     /// Continue the barrier from a checkpoint's `state`, the committed solution already in

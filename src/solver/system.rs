@@ -265,6 +265,29 @@ impl Simulation {
         sys.agree(r, "factorisation")
     }
 
+    /// Factor the tangent only if it is positive definite: true when it is (factored), false
+    /// when it is not or the factorisation failed (nothing usable is held). The solving
+    /// process's answer, on every process. Cheaper than [`Simulation::factor`] on an indefinite
+    /// tangent, whose indefinite fallback factorisation the barrier's descent never solves with
+    /// (it shifts or projects the tangent and factors again).
+    pub(super) fn factor_definite(&mut self) -> bool {
+        let _t = self.clock.scope(Phase::LinearSolve);
+        let sys = &mut self.sys;
+        if sys.distributed_solve {
+            sys.comm.broadcast(&mut sys.kk.values);
+        }
+        let r = if sys.solves_here() { sys.linear.factor_definite(&sys.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(true) };
+        let definite = matches!(r, Ok(true));
+        if sys.agree(r.map(|_| ()), "factorisation").is_err() {
+            return false;
+        }
+        let mut flag = [if definite { 1.0 } else { 0.0 }];
+        if sys.par.is_some() {
+            sys.comm.broadcast(&mut flag);
+        }
+        flag[0] > 0.5
+    }
+
     /// Solve `kk du = r` (rank 0 solves, the others receive `du`).
     pub(super) fn solve_linear(&mut self) -> Result<(), NewtonFailure> {
         let sys = &mut self.sys;
