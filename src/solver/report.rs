@@ -108,6 +108,10 @@ pub struct Timing {
     pub linear_solves: usize,
     #[serde(default)]
     pub linear_iterations: usize,
+    /// Numeric factorisations, those that found the matrix indefinite (or failed) included:
+    /// a Newton iteration whose tangent is made definite takes several.
+    #[serde(default)]
+    pub factorisations: usize,
 }
 
 /// A phase of the solution whose wall time [`Timing`] keeps.
@@ -178,6 +182,11 @@ impl Clock {
             t.linear_solves += 1;
             t.linear_iterations += iterations;
         });
+    }
+
+    /// Count a numeric factorisation.
+    pub fn count_factorisation(&self) {
+        self.update(|t| t.factorisations += 1);
     }
 
     fn update(&self, f: impl FnOnce(&mut Timing)) {

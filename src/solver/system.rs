@@ -261,6 +261,7 @@ impl Simulation {
             // needs the rows of its particles
             sys.comm.broadcast(&mut sys.kk.values);
         }
+        self.clock.count_factorisation();
         let r = if sys.solves_here() { sys.linear.factor(&sys.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(()) };
         sys.agree(r, "factorisation")
     }
@@ -276,6 +277,7 @@ impl Simulation {
         if sys.distributed_solve {
             sys.comm.broadcast(&mut sys.kk.values);
         }
+        self.clock.count_factorisation();
         let r = if sys.solves_here() { sys.linear.factor_definite(&sys.kk).map_err(|e| NewtonFailure::Linear(e.to_string())) } else { Ok(true) };
         let definite = matches!(r, Ok(true));
         if sys.agree(r.map(|_| ()), "factorisation").is_err() {
