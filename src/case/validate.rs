@@ -1268,10 +1268,10 @@ impl Cx<'_> {
         // the barrier's springs are a fictitious inertia: their stiffness grows as 1/Δt² on a
         // cut-back, as the inertia term of an implicit step does (see docs/case-file.md)
         stab.stiffen_on_cutback = c.stiffen_on_cutback.unwrap_or(spec.method == ContactMethod::Barrier);
-        // and a hundred times softer than the penalty methods' by default: the barrier's Newton
-        // converges with less help, and the springs' share of the wall work on the robustness
-        // suite is at most 0.52 % (1e-6: up to 1.93 %; 1e-5: up to 10.6 %), at more steps
-        // (docs/robustness.md)
+        // and a thousand times softer than the penalty methods' by default: the barrier's
+        // Newton converges with less help, and the springs' share of the wall work on the
+        // robustness suite is at most 0.34 % (1e-7: 1.74 % on the 256 polygons), at more steps
+        // (`stabilise::BARRIER_STABILISATION`, docs/robustness.md)
         if c.stabilisation.is_none() && spec.method == ContactMethod::Barrier {
             stab.factor = crate::stabilise::BARRIER_STABILISATION;
         }
