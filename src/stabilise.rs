@@ -57,8 +57,8 @@ pub struct StabilisationParams {
 /// 1e-5, [`StabilisationParams::default`]), measured on the robustness suite
 /// (`jobs/robustness/`, docs/robustness.md, twelfth measurement). At 1e-7 the springs took
 /// 1.74 % of the wall work on the 256 random polygons of case 12 (0.01–0.40 % on the cases
-/// of up to 64 particles); at 1e-8, 0.34 % on case 12 and at most 0.04 % on the others, every
-/// case reaching its end, at 1.75 times case 12's Newton iterations and 1.28 times the suite's
+/// of up to 64 particles); at 1e-8, 0.34 % on case 12, 0.90 % on the 1,024 polygons of case
+/// 13 (thirteenth measurement) and at most 0.04 % on the others, every case reaching its end, at 1.75 times case 12's Newton iterations and 1.28 times the suite's
 /// linear solves. Their work is spent where the packing jams (case 12: 0.91–0.94), where the
 /// step-size control cuts the steps until the springs, stiffening as a fixed mass, hold the
 /// rearranging particles; with a ζ ten times smaller the steps there are about three times

@@ -149,9 +149,10 @@ fn restart_from_a_periodic_checkpoint_is_bit_for_bit() {
 /// multipliers, and whether the steps descend on the potential from their start. 2 × 2 J2
 /// discs, biaxial, with the barrier: once with friction μ = 0.2 (lagged
 /// at each step's start from the converged state; the descent is on from step 8) and once
-/// cohering (no step needs the descent), a checkpoint every 13 steps. The checkpoint holds the barrier's state (cohering: with its ties); the restart from
-/// it equals the uninterrupted run bit for bit. (κ does not double in these runs: the default
-/// κ keeps every gap above d̂/1000 here.)
+/// cohering (no step needs the descent), a checkpoint every 13 steps. The checkpoint holds
+/// the barrier's state (cohering: with its ties); the restart from it equals the
+/// uninterrupted run bit for bit. (κ does not double in these runs: the default κ keeps
+/// every gap above d̂/1000 here.)
 #[test]
 fn barrier_restart_is_bit_for_bit() {
     use mpfem::checkpoint::Checkpoint;

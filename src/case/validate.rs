@@ -1270,8 +1270,8 @@ impl Cx<'_> {
         stab.stiffen_on_cutback = c.stiffen_on_cutback.unwrap_or(spec.method == ContactMethod::Barrier);
         // and a thousand times softer than the penalty methods' by default: the barrier's
         // Newton converges with less help, and the springs' share of the wall work on the
-        // robustness suite is at most 0.34 % (1e-7: 1.74 % on the 256 polygons), at more steps
-        // (`stabilise::BARRIER_STABILISATION`, docs/robustness.md)
+        // robustness suite is at most 0.90 % (the 1,024 polygons; 1e-7: 1.74 % on the 256),
+        // at more steps (`stabilise::BARRIER_STABILISATION`, docs/robustness.md)
         if c.stabilisation.is_none() && spec.method == ContactMethod::Barrier {
             stab.factor = crate::stabilise::BARRIER_STABILISATION;
         }

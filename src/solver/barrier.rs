@@ -38,7 +38,8 @@ const SMALL_SHIFT: f64 = 1e-4;
 
 /// The smallest relative shift τ tried ([`Simulation::shift_until_definite`]). The shift adds
 /// τ s_i to every diagonal entry, also those of the particles that nothing but the
-/// stabilisation springs hold (ζ = 1e-8 of the elements' stiffness, `stabilise::BARRIER_STABILISATION`): where τ s_i is larger
+/// stabilisation springs hold (ζ = 1e-8 of the elements' stiffness,
+/// `stabilise::BARRIER_STABILISATION`): where τ s_i is larger
 /// than a particle's own stiffness, Newton moves it by only the fraction k / (k + τ s) of the
 /// way to its equilibrium an iteration. Starting the shifts at 1e-6 held the retries of
 /// robustness case 12 (256 polygons) for 40–80 iterations on one loose particle each,
