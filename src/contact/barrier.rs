@@ -78,14 +78,20 @@ fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
-/// The region of the closest point of edge (a, b) to p. A degenerate edge (a = b) is `A`.
-pub fn point_edge_region(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> PointEdgeRegion {
+/// The projection parameter s = (p − a)·e / |e|² of p on edge (a, b), e = b − a (0 for a
+/// degenerate edge).
+pub fn projection_parameter(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let e = sub(b, a);
     let l = dot(e, e);
     if !(l > 0.0) {
-        return PointEdgeRegion::A;
+        return 0.0;
     }
-    let s = dot(sub(p, a), e) / l;
+    dot(sub(p, a), e) / l
+}
+
+/// The region of the closest point of edge (a, b) to p. A degenerate edge (a = b) is `A`.
+pub fn point_edge_region(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> PointEdgeRegion {
+    let s = projection_parameter(p, a, b);
     if s <= 0.0 {
         PointEdgeRegion::A
     } else if s >= 1.0 {
@@ -105,8 +111,9 @@ pub fn point_edge_sq_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> SqDistan
     }
 }
 
-/// d² = |p − q|² with q the node in slot `k` (1 = a, 2 = b) of the 6-dof layout.
-fn point_point(p: [f64; 2], q: [f64; 2], k: usize) -> SqDistance<6> {
+/// d² = |p − q|² with q the node in slot `k` (1 = a, 2 = b) of the 6-dof layout: the distance
+/// of p to an end of an edge, whether or not it is the edge's closest point.
+pub fn point_point(p: [f64; 2], q: [f64; 2], k: usize) -> SqDistance<6> {
     let r = sub(p, q);
     let mut out = SqDistance { d2: dot(r, r), grad: [0.0; 6], hess: [[0.0; 6]; 6] };
     for c in 0..2 {
@@ -120,8 +127,11 @@ fn point_point(p: [f64; 2], q: [f64; 2], k: usize) -> SqDistance<6> {
     out
 }
 
-/// d² = c² / L of p to the line through a and b, c = e × (p − a), L = |e|², e = b − a.
-fn point_line(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> SqDistance<6> {
+/// d² = c² / L of p to the line through a and b, c = e × (p − a), L = |e|², e = b − a (the
+/// point–edge distance in the edge's interior; also at an end where p lies exactly on the
+/// end's normal line, where it equals the distance to that end with a Hessian that is the
+/// limit from the interior side).
+pub fn point_line(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> SqDistance<6> {
     let e = sub(b, a);
     let r = sub(p, a);
     let c = cross(e, r);

@@ -6,13 +6,36 @@
 //! collision-free step of a straight motion of the whole assembly (CCD over every pair the
 //! motion can bring together) and the smallest distance.
 //!
-//! The pair set is the one `ipctk` builds (`NormalCollisions.build`): in 2D the collisions of
-//! the IPC toolkit are its edge–vertex pairs, with a vertex–vertex collision weighted by the
-//! number of edge–vertex pairs it stands for, so the potentials agree pair by pair
+//! # A node facing a corner is counted once
+//!
+//! Summed over edges alone, a node whose closest point on another particle is a vertex V is
+//! counted twice: once for each of the two edges that meet at V. On a flat side that makes a
+//! node facing a vertex carry the barrier 2 b(d), and a node beside it b(d): the energy has a
+//! ridge at every vertex, with a tangential curvature of −|b′|/d, as large as the normal
+//! stiffness of the pair. Where the particles' meshes match (a regular grid of octagons whose
+//! flat sides face node to node), every loaded node sits on such a ridge: every tangent is
+//! indefinite, and once the symmetry breaks the nodes slide sideways with forces of the order
+//! of their normal forces (the 1,024-octagon grid failed at solid ratio 0.863 that way,
+//! docs/robustness.md). So, as the IPC toolkit's "improved max approximator" does (Li, Kaufman
+//! and Jiang, "Convergent Incremental Potential Contact", 2023; `ipctk`'s
+//! `CollisionSetType.IMPROVED_MAX_APPROX`), every node p and vertex V of another particle closer
+//! than d̂ also contribute −(k − 1) b(|p − V|), k the number of boundary edges at V (2 on a
+//! closed boundary): where both edges' closest point is V the two terms and the correction add
+//! up to b(|p − V|) once, and a node sliding along a flat side sees b(d) throughout, with no
+//! ridge. Each pair's term stays a barrier of its own: the correction goes to the edge at V
+//! whose closest point to p is V (the first by index if both are; that pair's term then
+//! cancels exactly and the pair is left out), and only where neither is (a vertex sharper than
+//! a right angle) to the first edge at V, whose term b(d) − b(|p − V|) is then still positive
+//! (d ≤ |p − V|).
+//!
+//! The pair set is then the one `ipctk` builds (`NormalCollisions.build` with the improved max
+//! approximator, without area weighting): its edge–vertex pairs, a vertex–vertex collision
+//! weighted by the number of edge–vertex pairs it stands for, less one for each end of the
+//! node–vertex pair whose vertex has two edges, so the potentials agree
 //! (`tests/barrier_ipctk.rs`). Unlike the toolkit's default, nodes and edges of the same particle
 //! do not interact (a particle's own boundary never folds onto itself in a compaction).
 
-use super::barrier::{barrier_term, point_edge_region, point_edge_sq_distance, point_edge_toi, point_wall_sq_distance, point_wall_toi, BarrierTerm, PointEdgeRegion, CCD_RESCALING};
+use super::barrier::{barrier_term, point_edge_region, point_edge_sq_distance, point_edge_toi, point_line, point_point, point_wall_sq_distance, point_wall_toi, projection_parameter, BarrierTerm, PointEdgeRegion, CCD_RESCALING};
 use super::geometry::{unit, Wall};
 use super::search::{for_each_swept_pair, ContactSearch};
 use super::Segment;
@@ -52,6 +75,11 @@ pub struct BarrierEval {
     pub min_distance: f64,
     /// Normal force of the particles on each wall (N/mm, compression positive).
     pub wall_force: Vec<f64>,
+    /// Node–edge pairs within d̂ whose term the corner correction cancels exactly (left out of
+    /// `edges`), and the corner corrections made: Σ (k − 1) over the node–vertex pairs within
+    /// d̂ whose vertex has k ≥ 2 edges (see the module docs).
+    pub cancelled: usize,
+    pub corners: usize,
 }
 
 impl BarrierEval {
@@ -239,6 +267,8 @@ pub struct BarrierContact {
     /// sorted.
     pub ties: Vec<Tie>,
     pub tied: Vec<(usize, usize)>,
+    /// The boundary segments at each node (by node number, sorted; empty off the boundary).
+    vertex_segments: Vec<Vec<usize>>,
 }
 
 /// The default activation distance d̂: 1/20 of the smallest element size `h_min` (mm) of the
@@ -281,7 +311,14 @@ impl BarrierContact {
 
     pub fn new(segments: Vec<Segment>, nodes: Vec<(usize, usize)>, dhat: f64, kappa: f64) -> Self {
         let search = ContactSearch::new(segments.clone());
-        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new() }
+        let n = segments.iter().flat_map(|s| s.nodes).max().map_or(0, |m| m + 1);
+        let mut vertex_segments = vec![Vec::new(); n];
+        for (i, s) in segments.iter().enumerate() {
+            for &v in &s.nodes {
+                vertex_segments[v].push(i);
+            }
+        }
+        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments }
     }
 
     /// The barrier terms at coordinates `x` (every node) with the walls `walls` where they are;
@@ -296,6 +333,9 @@ impl BarrierContact {
         out.wall_force.clear();
         out.wall_force.resize(walls.len(), 0.0);
         self.search.update(x);
+        out.cancelled = 0;
+        out.corners = 0;
+        let xh = self.dhat * self.dhat;
         for (node, s) in self.search.pairs(x, &self.nodes, self.dhat) {
             let seg = self.segments[s];
             if self.is_tied(node, seg.body) {
@@ -306,19 +346,62 @@ impl BarrierContact {
             if !(d.d2 > 0.0) {
                 return Err(Intersection::Edge { node, segment: s, distance: d.d2.max(0.0).sqrt() });
             }
-            let Some(term) = barrier_term(&d, self.dhat, self.kappa, project) else { continue };
+            if d.d2 >= xh {
+                continue;
+            }
             let distance = d.d2.sqrt();
             out.min_distance = out.min_distance.min(distance);
+            let region = point_edge_region(p, a, b);
+            // the corner corrections this pair takes: (slot of the vertex, k − 1)
+            let mut corrections: [(usize, f64); 2] = [(0, 0.0); 2];
+            let mut n_corr = 0;
+            for (slot, v) in [(1, seg.nodes[0]), (2, seg.nodes[1])] {
+                let q = x[v];
+                let k = self.vertex_segments[v].len();
+                if k < 2 || (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) >= xh {
+                    continue;
+                }
+                if self.corner_owner(p, v, x) == s {
+                    out.corners += k - 1;
+                    corrections[n_corr] = (slot, (k - 1) as f64);
+                    n_corr += 1;
+                }
+            }
+            let at = match region {
+                PointEdgeRegion::A => 1,
+                PointEdgeRegion::B => 2,
+                PointEdgeRegion::Interior => 0,
+            };
+            if n_corr == 1 && corrections[0] == (at, 1.0) {
+                // the closest point is the vertex this pair corrects for: b − b = 0 exactly
+                out.cancelled += 1;
+                continue;
+            }
+            // p exactly on the normal line at an end (a node facing a vertex of a flat side
+            // on a symmetric mesh): the distance of the interior's side, whose Hessian has no
+            // curvature along the edge, as on either side of the line once the correction is
+            // made (the end's form would put the ridge back into the tangent)
+            let t = projection_parameter(p, a, b);
+            let form = if at != 0 && (t == 0.0 || t == 1.0) { point_line(p, a, b) } else { d };
+            let Some(mut term) = barrier_term(&form, self.dhat, self.kappa, false) else { continue };
+            for &(slot, w) in &corrections[..n_corr] {
+                let q = if slot == 1 { a } else { b };
+                if let Some(c) = barrier_term(&point_point(p, q, slot), self.dhat, self.kappa, false) {
+                    term.energy -= w * c.energy;
+                    for i in 0..6 {
+                        term.grad[i] -= w * c.grad[i];
+                        for j in 0..6 {
+                            term.hess[i][j] -= w * c.hess[i][j];
+                        }
+                    }
+                }
+            }
+            if project {
+                super::barrier::project_psd(&mut term.hess);
+            }
             out.energy += term.energy;
             let [n1, n2] = seg.nodes;
-            out.edges.push(EdgeTerm {
-                node,
-                segment: s,
-                dofs: [2 * node, 2 * node + 1, 2 * n1, 2 * n1 + 1, 2 * n2, 2 * n2 + 1],
-                region: point_edge_region(p, a, b),
-                distance,
-                term,
-            });
+            out.edges.push(EdgeTerm { node, segment: s, dofs: [2 * node, 2 * node + 1, 2 * n1, 2 * n1 + 1, 2 * n2, 2 * n2 + 1], region, distance, term });
         }
         for (w, wall) in walls.iter().enumerate() {
             let n = unit(wall.normal);
@@ -395,6 +478,21 @@ impl BarrierContact {
     /// Whether `node` is tied to particle `body` (and so out of its barrier).
     pub fn is_tied(&self, node: usize, body: usize) -> bool {
         !self.tied.is_empty() && self.tied.binary_search(&(node, body)).is_ok()
+    }
+
+    /// The edge at vertex `v` that takes the corner correction of a node at `p` (see the
+    /// module docs): the first of v's edges whose closest point to p is v, else the first.
+    fn corner_owner(&self, p: [f64; 2], v: usize, x: &[[f64; 2]]) -> usize {
+        let at_v = |s: usize| {
+            let [a, b] = self.segments[s].nodes;
+            match point_edge_region(p, x[a], x[b]) {
+                PointEdgeRegion::A => a == v,
+                PointEdgeRegion::B => b == v,
+                PointEdgeRegion::Interior => false,
+            }
+        };
+        let edges = &self.vertex_segments[v];
+        edges.iter().copied().find(|&s| at_v(s)).unwrap_or(edges[0])
     }
 
     /// Tie every boundary node that is within d̂ of an edge of another particle it is not yet
@@ -566,4 +664,113 @@ mod tests {
             }
         }
     }
+
+    /// The energy, gradient and (dense) Hessian of the barrier over every dof at `x`.
+    fn totals(c: &mut BarrierContact, x: &[[f64; 2]]) -> (f64, Vec<f64>, Vec<Vec<f64>>, BarrierEval) {
+        let mut eval = BarrierEval::default();
+        c.evaluate(x, &[], false, &mut eval).expect("admissible");
+        let n = 2 * x.len();
+        let mut g = vec![0.0; n];
+        eval.add_gradient(&mut g);
+        let mut h = vec![vec![0.0; n]; n];
+        for e in &eval.edges {
+            for i in 0..6 {
+                for j in 0..6 {
+                    h[e.dofs[i]][e.dofs[j]] += e.term.hess[i][j];
+                }
+            }
+        }
+        (eval.energy, g, h, eval)
+    }
+
+    /// A node sliding along a flat side made of collinear edges sees one barrier, κ b(d², d̂²),
+    /// wherever it faces the side: facing a vertex (exactly, and 1e-3 d̂ to either side) as
+    /// between them, with no tangential force and no negative tangential curvature (closed
+    /// form; tolerance 1e-12 relative, round-off). Summed over the edges alone it would see
+    /// 2 κ b at a vertex, a ridge with a curvature of −|∂E/∂d| / d along the side.
+    #[test]
+    fn a_node_sliding_along_a_flat_side_sees_one_barrier() {
+        let (dhat, kappa, d) = (0.05, 3.0, 0.3 * 0.05);
+        // the side: a closed rectangle of body 1 whose top is split into four edges of length
+        // 1, the node (body 0) above it
+        let mut x = vec![[0.0, 0.0]];
+        let top: Vec<[f64; 2]> = (0..=4).map(|i| [i as f64, 0.0]).collect();
+        x.extend(&top);
+        x.push([4.0, -1.0]);
+        x.push([0.0, -1.0]);
+        // nodes 1..=5 the top (left to right), 6, 7 below; the rectangle counter-clockwise is
+        // 7 → 6 → 5 → 4 → … → 1 → 7
+        let ring = [7, 6, 5, 4, 3, 2, 1];
+        let segments: Vec<Segment> = (0..ring.len()).map(|k| Segment { body: 1, nodes: [ring[k], ring[(k + 1) % ring.len()]] }).collect();
+        let nodes = vec![(0, 0), (1, 1), (2, 1), (3, 1), (4, 1), (5, 1), (6, 1), (7, 1)];
+        let mut c = BarrierContact::new(segments, nodes, dhat, kappa);
+        let one = kappa * super::super::barrier::clamped_log(d * d, dhat * dhat)[0];
+        for s in [1.5, 2.0 - 1e-3 * dhat, 2.0, 2.0 + 1e-3 * dhat, 2.0 + 0.5 * dhat, 2.5, 3.0] {
+            x[0] = [s, d];
+            let (energy, g, h, eval) = totals(&mut c, &x);
+            assert!((energy - one).abs() <= 1e-12 * one, "at s = {s}: energy {energy} against one barrier {one}");
+            assert!(g[0].abs() <= 1e-12 * g[1].abs(), "at s = {s}: a tangential force {} (normal {})", g[0], g[1]);
+            assert!(h[0][0] >= -1e-12 * h[1][1], "at s = {s}: tangential curvature {} (normal {})", h[0][0], h[1][1]);
+            let at_vertex = (s - s.round()).abs() < dhat;
+            assert_eq!(eval.corners, usize::from(at_vertex), "at s = {s}: corner corrections");
+        }
+    }
+
+    /// The barrier summed with its corner corrections is a potential with the gradient and
+    /// Hessian it reports: central differences (step 1e-7 mm) of the energy and of the gradient
+    /// against them, to 1e-6 relative, at nodes near the convex corners of an octagon (where
+    /// one, both or neither of the corner's edges has its closest point at the vertex) and
+    /// near a vertex of its flat side.
+    #[test]
+    fn the_corrected_barrier_is_the_derivative_of_its_energy() {
+        let dhat = 0.05;
+        let oct = crate::packing::regular_polygon([0.0, 0.0], 1.0, 8, std::f64::consts::PI / 8.0);
+        // counter-clockwise from the flat right side's midpoint, made a vertex, to its corner
+        // at 22.5° and on round
+        let mut poly = vec![[oct[0][0], 0.0]];
+        poly.extend(&oct);
+        let v = oct[0];
+        let n = poly.len();
+        let mut configs = Vec::new();
+        // around the corner: along the outward bisector and between the two edges' normals at
+        // the vertex (both edges' closest point is the vertex), and beyond each normal (one
+        // edge's is inside it)
+        let ang = std::f64::consts::PI / 8.0;
+        for (k, dir) in [ang, ang - 0.2, ang + 0.3, -0.1, ang + std::f64::consts::PI / 4.0 - 0.05].into_iter().enumerate() {
+            let r = (0.2 + 0.15 * k as f64) * dhat;
+            configs.push([v[0] + r * dir.cos(), v[1] + r * dir.sin()]);
+        }
+        // near the side's midpoint vertex, off its normal line
+        configs.push([poly[0][0] + 0.4 * dhat, 0.3 * dhat]);
+        configs.push([poly[0][0] + 0.25 * dhat, -0.6 * dhat]);
+        for (ci, p) in configs.into_iter().enumerate() {
+            let mut x = vec![p];
+            x.extend(&poly);
+            let segments: Vec<Segment> = (0..n).map(|k| Segment { body: 1, nodes: [1 + k, 1 + (k + 1) % n] }).collect();
+            let mut nodes = vec![(0, 0)];
+            nodes.extend((1..=n).map(|i| (i, 1)));
+            let mut c = BarrierContact::new(segments, nodes, dhat, 1.0e4);
+            let (_, g, h, eval) = totals(&mut c, &x);
+            assert!(eval.corners >= 1, "config {ci}: the node should be within d̂ of a vertex");
+            let step = 1e-7;
+            let gs = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let hs = h.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            for i in 0..2 * x.len() {
+                let mut shifted = |sgn: f64| {
+                    let mut y = x.clone();
+                    y[i / 2][i % 2] += sgn * step;
+                    totals(&mut c, &y)
+                };
+                let (ep, gp, _, _) = shifted(1.0);
+                let (em, gm, _, _) = shifted(-1.0);
+                let fd = (ep - em) / (2.0 * step);
+                assert!((fd - g[i]).abs() <= 1e-6 * gs, "config {ci}: gradient {i}: {} against {fd}", g[i]);
+                for j in 0..2 * x.len() {
+                    let fd = (gp[j] - gm[j]) / (2.0 * step);
+                    assert!((fd - h[j][i]).abs() <= 1e-6 * hs, "config {ci}: Hessian ({j}, {i}): {} against {fd}", h[j][i]);
+                }
+            }
+        }
+    }
+
 }

@@ -3,9 +3,14 @@
 Called by tests/barrier_ipctk.rs: python3 ipctk_barrier.py IN.json OUT.json
 IN: {"vertices": [[x, y]...], "edges": [[i, j]...], "body": [b...] (per vertex),
      "vertices_t1": [[x, y]...], "dhat": d, "kappa": k}
-OUT: {"energy": E, "gradient": [...], "step": t, "pairs": n (edge-vertex pairs, the vertex-vertex
-      collisions counted by their weights), "version": "..."}
+OUT: {"energy": E, "gradient": [...], "step": t, "pairs": n (the collisions' weights summed:
+      edge-vertex pairs, vertex-vertex collisions counted by their weights, the improved max
+      approximator's negative vertex-vertex weights included), "version": "..."}
 Vertices of different bodies interact only (a vertex and an edge of one body never do).
+The collision set is the improved max approximator's (Li, Kaufman and Jiang 2023), without
+area weighting: mpfem's barrier counts a node facing a vertex once (src/contact/barrier_problem.rs).
+ipctk logs a warning that this set is meant for area weighting; the energy it computes is
+the sum over the set all the same.
 """
 import json
 import sys
@@ -29,6 +34,7 @@ def main(src, dst):
     mesh = ipctk.CollisionMesh(V, E)
     mesh.can_collide = lambda i, j: body[i] != body[j]
     collisions = ipctk.NormalCollisions()
+    collisions.collision_set_type = ipctk.NormalCollisions.CollisionSetType.IMPROVED_MAX_APPROX
     collisions.build(mesh, V, case["dhat"])
     barrier = ipctk.BarrierPotential(case["dhat"], case["kappa"])
     energy = barrier(collisions, mesh, V)
