@@ -342,7 +342,21 @@ impl BarrierContact {
                 continue;
             }
             let (p, a, b) = (x[node], x[seg.nodes[0]], x[seg.nodes[1]]);
-            let d = point_edge_sq_distance(p, a, b);
+            // the region from the projection parameter once (as `point_edge_region` and
+            // `point_edge_sq_distance` find it); p exactly on the normal line at an end (a
+            // node facing a vertex of a flat side on a symmetric mesh) takes the interior's
+            // form of the distance: its Hessian has no curvature along the edge, as on either
+            // side of the line once the corner correction is made (the end's form would put
+            // the ridge back into the tangent)
+            let t = projection_parameter(p, a, b);
+            let (region, d) = if t < 0.0 {
+                (PointEdgeRegion::A, point_point(p, a, 1))
+            } else if t > 1.0 {
+                (PointEdgeRegion::B, point_point(p, b, 2))
+            } else {
+                let region = if t == 0.0 { PointEdgeRegion::A } else if t == 1.0 { PointEdgeRegion::B } else { PointEdgeRegion::Interior };
+                (region, point_line(p, a, b))
+            };
             if !(d.d2 > 0.0) {
                 return Err(Intersection::Edge { node, segment: s, distance: d.d2.max(0.0).sqrt() });
             }
@@ -351,7 +365,6 @@ impl BarrierContact {
             }
             let distance = d.d2.sqrt();
             out.min_distance = out.min_distance.min(distance);
-            let region = point_edge_region(p, a, b);
             // the corner corrections this pair takes: (slot of the vertex, k − 1)
             let mut corrections: [(usize, f64); 2] = [(0, 0.0); 2];
             let mut n_corr = 0;
@@ -377,13 +390,7 @@ impl BarrierContact {
                 out.cancelled += 1;
                 continue;
             }
-            // p exactly on the normal line at an end (a node facing a vertex of a flat side
-            // on a symmetric mesh): the distance of the interior's side, whose Hessian has no
-            // curvature along the edge, as on either side of the line once the correction is
-            // made (the end's form would put the ridge back into the tangent)
-            let t = projection_parameter(p, a, b);
-            let form = if at != 0 && (t == 0.0 || t == 1.0) { point_line(p, a, b) } else { d };
-            let Some(mut term) = barrier_term(&form, self.dhat, self.kappa, false) else { continue };
+            let Some(mut term) = barrier_term(&d, self.dhat, self.kappa, false) else { continue };
             for &(slot, w) in &corrections[..n_corr] {
                 let q = if slot == 1 { a } else { b };
                 if let Some(c) = barrier_term(&point_point(p, q, slot), self.dhat, self.kappa, false) {
