@@ -46,7 +46,7 @@ const SMALL_SHIFT: f64 = 1e-4;
 /// converging by 2.5 % an iteration or sliding off a saddle by 0.6 % an iteration; from 1e-10
 /// the same run to solid ratio 0.82 took 10 steps and 401 iterations instead of 19 and 773
 /// (docs/robustness.md, eleventh measurement).
-const SHIFT_MIN: f64 = 1e-10;
+pub(super) const SHIFT_MIN: f64 = 1e-10;
 
 /// How many times `[solver] max_iterations` the retry of a failed step gets, descending on the
 /// potential ([`Simulation::factor_descent`]): leaving a saddle by descent is progress the
@@ -110,6 +110,10 @@ pub(super) struct BarrierRun {
     /// (0: none yet): the next indefinite tangent's shifts start a tenth of it
     /// ([`Simulation::shift_until_definite`]).
     pub shift: f64,
+    /// Whether the last tangent factored was positive definite as assembled (true also when
+    /// the solver cannot tell, as LU cannot): a converged step whose tangent was definite is a
+    /// minimum, and [`Simulation::leave_saddle`] has nothing to look for.
+    pub definite: bool,
 }
 
 /// The stiffness of a tie relative to the softest particle's Young's modulus: k = 100 E
@@ -139,7 +143,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0 }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false }
     }
 
     /// The round-off of the ties' forces, after ties were made.
@@ -576,15 +580,22 @@ impl Simulation {
     pub(super) fn factor_descent(&mut self) -> Result<(), NewtonFailure> {
         let descent = self.barrier.as_ref().is_some_and(|b| b.descent);
         if !descent {
-            return self.factor();
+            let r = self.factor();
+            // (a solver that cannot tell, LU or iterative, is taken as definite: no saddle
+            // is looked for where the tangent is not symmetric)
+            let definite = r.is_ok() && self.sys.linear.definite() != Some(false);
+            self.note_definite(definite, true);
+            return r;
         }
         // (each stage asks only whether the matrix it tries is definite: an LLᵀ factorisation
         // that stops at the first pivot that is not positive, without the indefinite fallback
         // of `factor`, which the descent never solves with; a factorisation that fails
         // outright is shifted as an indefinite one is)
         if self.factor_definite() {
+            self.note_definite(true, false);
             return Ok(());
         }
+        self.note_definite(false, false);
         let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
         let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
         let shifted = self.shift_until_definite(start, SMALL_SHIFT);
@@ -607,11 +618,23 @@ impl Simulation {
         self.factor()
     }
 
+    /// Record whether the tangent just factored was definite; `from_root`: the answer is the
+    /// solving process's alone and goes to the others.
+    fn note_definite(&mut self, definite: bool, from_root: bool) {
+        let mut flag = [if definite { 1.0 } else { 0.0 }];
+        if from_root && self.sys.par.is_some() {
+            self.sys.comm.broadcast(&mut flag);
+        }
+        if let Some(b) = self.barrier.as_mut() {
+            b.definite = flag[0] > 0.5;
+        }
+    }
+
     /// Replace, in the assembled tangent, each barrier pair's Hessian by its projection onto
     /// the PSD matrices (where the tangent is assembled: the root process). The walls' pairs
     /// are left: a wall's distance is linear in the node's position, so their Hessians are
     /// positive semi-definite already.
-    fn project_pair_hessians(&mut self) {
+    pub(super) fn project_pair_hessians(&mut self) {
         if !self.sys.comm.is_root() {
             return;
         }
@@ -647,7 +670,7 @@ impl Simulation {
     /// the gap, 400 times the elements' stiffness, and a diagonal entry that is itself near
     /// zero; raising it by |K_ii| left the tangent indefinite at τ = 1 (and a zero pivot of the
     /// indefinite fallback failed the step outright, measured).
-    fn shift_until_definite(&mut self, start: f64, tau_max: f64) -> Option<f64> {
+    pub(super) fn shift_until_definite(&mut self, start: f64, tau_max: f64) -> Option<f64> {
         let pos = self.sys.kk.diagonal_positions();
         let d0: Vec<f64> = pos.iter().map(|p| p.map_or(0.0, |p| self.sys.kk.values[p])).collect();
         // each diagonal entry is raised by τ times twice its row's absolute sum: at τ = 1 the

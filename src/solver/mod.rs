@@ -32,6 +32,7 @@ mod newton;
 mod params;
 mod remeshing;
 mod report;
+mod saddle;
 mod state;
 mod stepping;
 mod system;
@@ -301,6 +302,7 @@ impl Simulation {
             remesh_baseline: vec![None; model.bodies.len()],
             last_report: None,
             last_step_easy: false,
+            saddle_departures: 0,
         };
         let mut sim = Self {
             model,

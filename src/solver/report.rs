@@ -65,6 +65,9 @@ pub struct RunSummary {
     pub cutbacks: usize,
     /// Particle re-meshes over the run.
     pub remeshes: usize,
+    /// Converged steps moved off a saddle and minimised again (barrier contact,
+    /// [`super::Simulation::leave_saddle`]).
+    pub saddle_departures: usize,
     pub final_time: f64,
     pub wall_time_s: f64,
     pub linear_solver: String,

@@ -117,4 +117,8 @@ pub struct RunState {
     /// Whether the last converged step was easy (the next one may grow).
     #[serde(default)]
     pub last_step_easy: bool,
+    /// Converged steps moved off a saddle and minimised again so far
+    /// ([`super::Simulation::leave_saddle`]).
+    #[serde(default)]
+    pub saddle_departures: usize,
 }

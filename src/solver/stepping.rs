@@ -77,6 +77,7 @@ impl Simulation {
             newton_iterations: self.run.total_iterations,
             cutbacks: self.run.total_cutbacks,
             remeshes: self.run.total_remeshes,
+            saddle_departures: self.run.saddle_departures,
             final_time: self.sol.time,
             wall_time_s: start.elapsed().as_secs_f64(),
             linear_solver: self.sys.linear_name.clone(),
@@ -338,7 +339,8 @@ impl Simulation {
             }
         }
         let restart = self.run.dt_prev > 0.0;
-        self.solve_from(u, inc, restart)
+        let trial = self.solve_from(u, inc, restart)?;
+        Ok(self.leave_saddle(trial, inc))
     }
 
     /// Commit a converged step: states, displacements, multipliers, time; build its report.
