@@ -123,8 +123,9 @@ impl Simulation {
     /// shift made it definite or the curvature found is round-off ([`CURVATURE_TOL`]). The
     /// solving process's tangent decides; on several processes its quotients are broadcast.
     fn negative_curvature(&mut self, departure: usize) -> Option<Vec<f64>> {
-        let k_exact = self.sys.kk.values.clone();
-        let diag: Vec<f64> = self.sys.kk.diagonal();
+        // the unshifted tangent, for the Rayleigh quotients
+        let k_exact = self.sys.kk.clone();
+        let diag: Vec<f64> = k_exact.diagonal();
         let tau = self.shift_until_definite(super::barrier::SHIFT_MIN, 1.0)?;
         let n = self.sys.r.len();
         let n_free = self.sys.assembler.n_free;
@@ -150,10 +151,7 @@ impl Simulation {
             self.sys.du.iter_mut().for_each(|v| *v = 0.0);
             self.solve_linear().ok()?;
             x.copy_from_slice(&self.sys.du);
-            let kk = &self.sys.kk;
-            for (i, out) in kx.iter_mut().enumerate().take(kk.nrows) {
-                *out = (kk.row_ptr[i]..kk.row_ptr[i + 1]).map(|p| k_exact[p] * x[kk.col_idx[p]]).sum();
-            }
+            k_exact.mul_vec(&x, &mut kx);
             let xx: f64 = x.iter().map(|v| v * v).sum();
             let xkx: f64 = x.iter().zip(&kx).map(|(a, b)| a * b).sum();
             let xdx: f64 = x.iter().zip(&diag).map(|(a, d)| a * a * d.abs()).sum();
