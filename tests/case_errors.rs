@@ -480,11 +480,11 @@ fn defaults_are_applied() {
         }
     );
     let s = c.solver;
-    // with the barrier contact (the default) full Newton gets 50 iterations a solve, 25 with
+    // with the barrier contact (the default) full Newton gets 100 iterations a solve, 25 with
     // the node-to-segment methods
-    assert_eq!(s, SolverSpec { max_iterations: 50, ..SolverSpec::default() });
+    assert_eq!(s, SolverSpec { max_iterations: 100, ..SolverSpec::default() });
     assert_eq!(s.newton, NewtonKind::Full);
-    assert_eq!(s.max_iterations, 50);
+    assert_eq!(s.max_iterations, 100);
     assert_eq!(SolverSpec::default().max_iterations, 25);
     assert_eq!(s.residual_tol, 1e-8);
     assert_eq!(s.energy_tol, 1e-16);
