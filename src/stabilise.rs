@@ -62,7 +62,9 @@ pub struct StabilisationParams {
 /// linear solves. Their work is spent where the packing jams (case 12: 0.91–0.94), where the
 /// step-size control cuts the steps until the springs, stiffening as a fixed mass, hold the
 /// rearranging particles; with a ζ ten times smaller the steps there are about three times
-/// shorter and the work five times smaller. (Earlier: 1e-6 put two of ten cases above 1 %.)
+/// shorter and the work five times smaller. (Earlier: 1e-6 put two of ten cases above 1 %.
+/// Later, 1e-9: the octagon grids' snaps were gone, but the suite's random packings took up
+/// to twice the steps and case 12 crawled in its loose phase; eighteenth measurement.)
 pub const BARRIER_STABILISATION: f64 = 1e-8;
 
 impl Default for StabilisationParams {
