@@ -185,6 +185,8 @@ impl Simulation {
         // that way is progress the residual does not show (it grows while the iterate slides
         // off): it gets more iterations
         let max_iterations = if self.barrier.as_ref().is_some_and(|b| b.descent) { super::barrier::DESCENT_ITERATIONS * self.spec.max_iterations } else { self.spec.max_iterations };
+        // how many updates in a row the collision-free step has cut below half
+        let mut limited = 0;
         for k in 0..=max_iterations {
             let reference = self.reference_force();
             let rel = rnorm / reference;
@@ -274,6 +276,11 @@ impl Simulation {
                 }
                 None => (1.0, 1.0, 6),
             };
+            limited = if eta_max < 0.5 { limited + 1 } else { 0 };
+            if limited >= super::barrier::CCD_LIMITED_ITERATIONS {
+                tracing::debug!(iteration = k, limited, "the collision-free step keeps cutting the updates: the step is cut back");
+                return Err(NewtonFailure::ContactLimited { iteration: k, limited, residuals });
+            }
             // the barrier's energy and slope along the update at its start
             let line0 = self.contact_potential(&u0, &du_full);
             let mut eta = eta_max;
