@@ -1874,7 +1874,9 @@ mod tests {
 /// cut-back, held the grid until it snapped: 1.27 % and 1.54 % of the wall work. With 100 both
 /// converge that attempt (springs 1.8e-7 and 3.6e-6) and most of the suite's cases cost about
 /// the same. The price: an attempt that will not converge runs its whole 100 (400 in the
-/// descent) — case 10 takes 1.66 times the iterations, and the 1,024-octagon grid did not get
-/// through its snap in 53 minutes (25 iterations: the whole run in 34); an early exit for
-/// such attempts is open (docs/robustness.md, seventeenth and eighteenth measurements).
+/// descent) — case 10 takes 1.66 times the iterations. The 1,024-octagon grid's retries at its
+/// snap ran their 400 with every update cut short by the collision detection and did not get
+/// through in 53 minutes; a retry now stops once its last `max_iterations` updates were all
+/// cut so (`NewtonFailure::ContactLimited`), and the grid gets past its snap (docs/robustness.md,
+/// seventeenth to nineteenth measurements).
 pub const BARRIER_MAX_ITERATIONS: usize = 100;

@@ -54,16 +54,6 @@ pub(super) const SHIFT_MIN: f64 = 1e-10;
 /// that retry at its size counts as easy with as many times `[time] easy_iterations`.
 pub const DESCENT_ITERATIONS: usize = 4;
 
-/// How many Newton updates in a row the collision-free step may cut below half of themselves
-/// before the solve gives up and the step is cut back. An update that the CCD keeps stopping
-/// is aimed through contacts its linearisation does not hold yet (pairs beyond d̂ when it
-/// was computed): the time step brings particles together faster than the solve can take
-/// the contacts on, and a shorter step is the remedy, not more iterations. Measured: on the
-/// 1,024-octagon grid (creep, 0.25 s steps) an attempt ran 340 updates in a row limited to
-/// 0.1–0.25 of themselves without converging, 7 minutes a try; over the 470 solves
-/// (12,329 iterations) of robustness case 08, which converge however long they take, the
-/// longest such run was 13 (docs/robustness.md, nineteenth measurement).
-pub const CCD_LIMITED_ITERATIONS: usize = 25;
 
 /// The barrier contact of a simulation and its state within a step.
 #[derive(Debug)]

@@ -62,9 +62,9 @@ pub enum NewtonFailure {
     NotConverged { iterations: usize, residuals: Vec<f64> },
     #[error("diverged at iteration {iteration} (residual history {residuals:?})")]
     Diverged { iteration: usize, residuals: Vec<f64> },
-    /// The barrier's collision-free step cut every one of the last updates below half of
-    /// itself (`barrier::CCD_LIMITED_ITERATIONS`): the step is too long for the contacts it
-    /// makes.
+    /// The barrier's collision-free step cut each of the last `max_iterations` updates below
+    /// half of itself (in the descent's retry, which may run longer): the step is too long for
+    /// the contacts it makes.
     #[error("the collision-free step limited {limited} Newton updates in a row below half of themselves by iteration {iteration}: the step makes contacts faster than they converge (residual history {residuals:?})")]
     ContactLimited { iteration: usize, limited: usize, residuals: Vec<f64> },
     #[error("{0}")]
