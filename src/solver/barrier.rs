@@ -54,7 +54,6 @@ pub(super) const SHIFT_MIN: f64 = 1e-10;
 /// that retry at its size counts as easy with as many times `[time] easy_iterations`.
 pub const DESCENT_ITERATIONS: usize = 4;
 
-
 /// The barrier contact of a simulation and its state within a step.
 #[derive(Debug)]
 pub(super) struct BarrierRun {

@@ -285,8 +285,9 @@ impl Simulation {
             // nineteenth measurement): on the 1,024-octagon grid such attempts ran 340 updates
             // in a row at 0.1–0.25 of themselves without converging, 7 minutes a try; the
             // longest such run in the 12,329 iterations of robustness case 08 was 13. Stopping
-            // after 25 made paper job 5.2.1 jam at 0.971 (its grid cut back into a snap), so
-            // the first attempt keeps its whole budget and only the retry's extra is refused.
+            // after 25 made paper job 5.2.1 jam at 0.971 (its grid cut back into a snap), so the
+            // count is `max_iterations`: the first attempt loses at most its last update (when
+            // every one of its updates was cut), and the retry's extra iterations are refused.
             limited = if eta_max < 0.5 { limited + 1 } else { 0 };
             if limited >= self.spec.max_iterations {
                 tracing::debug!(iteration = k, limited, "the collision-free step keeps cutting the updates: the step is cut back");
