@@ -185,9 +185,8 @@ impl BarrierRun {
     }
 
     /// The dofs of the block of pair (node, segment).
-    pub fn pair_dofs(&self, (node, s): (usize, usize)) -> Vec<usize> {
-        let [a, b] = self.contact.segments[s].nodes;
-        vec![2 * node, 2 * node + 1, 2 * a, 2 * a + 1, 2 * b, 2 * b + 1]
+    pub fn pair_dofs(&self, pair: (usize, usize)) -> Vec<usize> {
+        self.contact.pair_dofs(pair)
     }
 }
 
@@ -262,7 +261,8 @@ impl Simulation {
         let walls = b.walls_at(b.alpha);
         b.contact.evaluate(x, &walls, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()))?;
         if tangent {
-            let missing: Vec<(usize, usize)> = b.eval.edges.iter().map(|e| (e.node, e.segment)).filter(|p| b.pattern.binary_search(p).is_err()).collect();
+            let c = &b.contact;
+            let missing: Vec<(usize, usize)> = b.eval.edges.iter().map(|e| (e.node, e.segment)).chain(b.eval.quads.iter().map(|q| (c.edge_key(q.edge), q.segment))).filter(|p| b.pattern.binary_search(p).is_err()).collect();
             if !missing.is_empty() {
                 let mut pairs = b.pattern.clone();
                 pairs.extend(missing);
@@ -285,9 +285,8 @@ impl Simulation {
         let eps = FRICTION_EPS * b.h_min;
         for fp in &b.friction {
             let t = fp.term(u, &self.sol.u, eps);
-            let width = if fp.segment.is_some() { 6 } else { 2 };
             energy += t.energy;
-            slope += (0..width).map(|i| t.grad[i] * du[fp.dofs[i]]).sum::<f64>();
+            slope += (0..fp.width).map(|i| t.grad[i] * du[fp.dofs[i]]).sum::<f64>();
         }
         Some((energy, slope))
     }
@@ -305,15 +304,15 @@ impl Simulation {
         let eps = FRICTION_EPS * b.h_min;
         for fp in &b.friction {
             let t = fp.term(u, &self.sol.u, eps);
-            let width = if fp.segment.is_some() { 6 } else { 2 };
-            for i in 0..width {
+            for i in 0..fp.width {
                 sys.f_int[fp.dofs[i]] += t.grad[i];
             }
             if tangent {
-                match fp.segment {
-                    Some(seg) => {
-                        let i = b.pattern.binary_search(&(fp.node, seg)).expect("the pattern holds every lagged pair");
-                        sys.maps.pairs.add(&mut sys.kk.values, i, t.hess.as_flattened());
+                match fp.block {
+                    Some(pair) => {
+                        let i = b.pattern.binary_search(&pair).expect("the pattern holds every lagged pair");
+                        let h = top_left::<8>(&t.hess, fp.width);
+                        sys.maps.pairs.add(&mut sys.kk.values, i, &h);
                     }
                     None => {
                         let i = b.contact.nodes.binary_search_by_key(&fp.node, |&(n, _)| n).expect("a boundary node");
@@ -345,11 +344,15 @@ impl Simulation {
                 let i = b.contact.nodes.binary_search_by_key(&w.node, |&(n, _)| n).expect("a boundary node");
                 sys.maps.nodes.add(&mut sys.kk.values, i, w.term.hess.as_flattened());
             }
+            for q in &b.eval.quads {
+                let i = b.pattern.binary_search(&(b.contact.edge_key(q.edge), q.segment)).expect("the pattern holds every pair within d̂");
+                sys.maps.pairs.add(&mut sys.kk.values, i, q.term.hess.as_flattened());
+            }
         }
         self.contact_stats = ContactStats {
             wall_force: b.eval.wall_force.clone(),
             max_penetration: 0.0,
-            active: b.eval.edges.len() + b.eval.walls.len() + b.contact.ties.len(),
+            active: b.eval.edges.len() + b.eval.quads.len() + b.eval.walls.len() + b.contact.ties.len(),
             violation: 0.0,
         };
     }
@@ -400,7 +403,7 @@ impl Simulation {
         let Some(b) = self.barrier.as_mut() else { return false };
         let walls = b.walls_at(b.alpha);
         let new = b.eval.friction_pairs(&b.contact, &x, &walls, b.mu, &b.mu_walls);
-        let key = |f: &FrictionPair| (f.node, f.segment.unwrap_or(usize::MAX));
+        let key = |f: &FrictionPair| f.id;
         let mut old: Vec<((usize, usize), f64)> = b.friction.iter().map(|f| (key(f), f.mu_lambda)).collect();
         old.sort_by(|a, c| a.0.cmp(&c.0));
         let scale = new.iter().chain(&b.friction).map(|f| f.mu_lambda).fold(0.0, f64::max);
@@ -498,6 +501,15 @@ impl Simulation {
             }
             gap(&mut out.gap, e.node, e.distance);
         }
+        for q in &b.eval.quads {
+            let [c, d] = b.contact.segments[q.edge].nodes;
+            let [a, e] = b.contact.segments[q.segment].nodes;
+            for (i, n) in [c, d, a, e].into_iter().enumerate() {
+                normal[n][0] -= q.term.grad[2 * i];
+                normal[n][1] -= q.term.grad[2 * i + 1];
+            }
+            gap(&mut out.gap, if q.xi < 0.5 { c } else { d }, q.distance);
+        }
         for w in &b.eval.walls {
             normal[w.node][0] -= w.term.grad[0];
             normal[w.node][1] -= w.term.grad[1];
@@ -525,11 +537,10 @@ impl Simulation {
         let eps = FRICTION_EPS * b.h_min;
         for fp in &b.friction {
             let t = fp.term(u, &self.sol.u, eps);
-            let width = if fp.segment.is_some() { 6 } else { 2 };
-            for i in 0..width {
+            for i in 0..fp.width {
                 out.force[fp.dofs[i] / 2][fp.dofs[i] % 2] -= t.grad[i];
             }
-            let slip: f64 = (0..width).map(|i| fp.w[i] * (u[fp.dofs[i]] - self.sol.u[fp.dofs[i]])).sum();
+            let slip: f64 = (0..fp.width).map(|i| fp.w[i] * (u[fp.dofs[i]] - self.sol.u[fp.dofs[i]])).sum();
             if fp.mu_lambda > 0.0 && slip.abs() < eps && out.status[fp.node] > 0 {
                 out.status[fp.node] = out.status[fp.node].max(2);
             }
@@ -641,15 +652,13 @@ impl Simulation {
         let Some(b) = self.barrier.as_ref() else { return };
         let sys = &mut self.sys;
         for e in &b.eval.edges {
-            let mut h = e.term.hess;
-            crate::contact::barrier::project_psd(&mut h);
-            let mut delta = [[0.0; 6]; 6];
-            for (i, row) in delta.iter_mut().enumerate() {
-                for (j, v) in row.iter_mut().enumerate() {
-                    *v = h[i][j] - e.term.hess[i][j];
-                }
-            }
+            let delta = projection_change(&e.term.hess);
             let i = b.pattern.binary_search(&(e.node, e.segment)).expect("the pattern holds every pair within d̂");
+            sys.maps.pairs.add(&mut sys.kk.values, i, delta.as_flattened());
+        }
+        for q in &b.eval.quads {
+            let delta = projection_change(&q.term.hess);
+            let i = b.pattern.binary_search(&(b.contact.edge_key(q.edge), q.segment)).expect("the pattern holds every pair within d̂");
             sys.maps.pairs.add(&mut sys.kk.values, i, delta.as_flattened());
         }
     }
@@ -764,4 +773,21 @@ impl Simulation {
         }
         b.min_distance = d;
     }
+}
+
+/// The leading `width` × `width` block of an N × N matrix, row by row.
+fn top_left<const N: usize>(h: &[[f64; N]; N], width: usize) -> Vec<f64> {
+    (0..width).flat_map(|i| h[i][..width].iter().copied()).collect()
+}
+
+/// What projecting a pair's Hessian onto the PSD matrices adds to it: P(H) − H.
+fn projection_change<const N: usize>(hess: &[[f64; N]; N]) -> [[f64; N]; N] {
+    let mut delta = *hess;
+    crate::contact::barrier::project_psd(&mut delta);
+    for (row, h) in delta.iter_mut().zip(hess) {
+        for (v, h) in row.iter_mut().zip(h) {
+            *v -= h;
+        }
+    }
+    delta
 }
