@@ -166,7 +166,7 @@ impl Model {
     /// The barrier contact of this model (`[contact] method = "barrier"`; `None` with another
     /// method or when nothing can touch).
     pub fn barrier_contact(&self) -> Option<crate::contact::barrier_problem::BarrierContact> {
-        (self.contact.method == ContactMethod::Barrier && self.has_contact()).then(|| crate::contact::barrier_problem::BarrierContact::of_bodies(&self.contact_bodies(), &self.x0, self.contact.dhat))
+        (self.contact.method == ContactMethod::Barrier && self.has_contact()).then(|| crate::contact::barrier_problem::BarrierContact::of_bodies(&self.contact_bodies(), &self.x0, self.contact.dhat, self.contact.integration))
     }
 
     /// The rigid walls at time `t` as the planes the contact kernels take.

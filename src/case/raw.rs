@@ -140,6 +140,7 @@ pub struct ContactRaw {
     pub lagrange_regularisation: Option<f64>,
     pub normal: Option<String>,
     pub dhat: Option<f64>,
+    pub integration: Option<String>,
 }
 
 #[derive(Deserialize)]

@@ -1235,6 +1235,16 @@ impl Cx<'_> {
         if let Some(v) = c.penalty {
             spec.penalty = if v == 0.0 { None } else { Some(self.positive("contact.penalty", v, "a penalty in MPa/mm (0 = automatic)")?) };
         }
+        if let Some(v) = c.integration.as_deref() {
+            use crate::contact::BarrierIntegration;
+            if spec.method != ContactMethod::Barrier {
+                return Err(self.err("contact.integration", format!("value \"{v}\" given without contact.method = \"barrier\": it says where the barrier is evaluated; expected it only with the barrier")));
+            }
+            spec.integration = match self.choice("contact.integration", v, &["edges", "nodes"])? {
+                "nodes" => BarrierIntegration::Nodes,
+                _ => BarrierIntegration::Edges,
+            };
+        }
         if let Some(v) = c.dhat {
             spec.dhat = Some(self.positive("contact.dhat", v, "the barrier's activation distance in mm (> 0; omit it for the default, 1/20 of the smallest element size)")?);
         }

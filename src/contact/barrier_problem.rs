@@ -415,14 +415,19 @@ impl BarrierContact {
     /// [`default_kappa`] with the softest body and the finest boundary, and the walls' barriers
     /// d̂/2 behind their planes: a particle may touch a wall at the start (the die is often
     /// drawn round the packing), and a loaded node then rests within d̂/2 of the wall's plane
-    /// (its gap to the barrier's zero lies between d̂/100 and d̂, [`default_kappa`]).
-    pub fn of_bodies(bodies: &[super::ContactBody], x0: &[[f64; 2]], dhat: Option<f64>) -> Self {
+    /// (its gap to the barrier's zero lies between d̂/100 and d̂, [`default_kappa`]). With
+    /// `integration` [`super::BarrierIntegration::Edges`] the Gauss points of the edges carry
+    /// the contact between particles (module docs), with `Nodes` the nodes alone, at full reach.
+    pub fn of_bodies(bodies: &[super::ContactBody], x0: &[[f64; 2]], dhat: Option<f64>, integration: super::BarrierIntegration) -> Self {
         let b = super::boundary::Boundary::new(bodies, x0, false);
         let h_min = b.h_min();
         let e_min = b.body_e.iter().copied().fold(f64::INFINITY, f64::min);
         let dhat = dhat.unwrap_or_else(|| default_dhat(h_min));
         let mut c = Self::new(b.segments, b.slaves, dhat, default_kappa(e_min, h_min, dhat));
         c.wall_offset = 0.5 * dhat;
+        if integration == super::BarrierIntegration::Nodes {
+            return c;
+        }
         c.node_reach = NODE_REACH;
         c.quad_points = EDGE_POINTS;
         c.quad_scale = c.segments.iter().map(|s| {
