@@ -365,6 +365,12 @@ pub struct BarrierContact {
     pub node_reach: f64,
     pub quad_points: usize,
     pub quad_scale: Vec<f64>,
+    /// Scratch of [`BarrierContact::evaluate`], kept so that its every call does not allocate:
+    /// the nodes' coordinates followed by the edges' points, the points as search slaves, and
+    /// each point's (edge, index, ξ, weight).
+    quad_x: Vec<[f64; 2]>,
+    quad_slaves: Vec<(usize, usize)>,
+    quad_virt: Vec<(usize, usize, f64, f64)>,
 }
 
 /// Gauss–Legendre points on each boundary edge whose barrier terms carry the contact (see the
@@ -446,7 +452,7 @@ impl BarrierContact {
                 vertex_segments[v].push(i);
             }
         }
-        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments, node_reach: 1.0, quad_points: 0, quad_scale: Vec::new() }
+        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments, node_reach: 1.0, quad_points: 0, quad_scale: Vec::new(), quad_x: Vec::new(), quad_slaves: Vec::new(), quad_virt: Vec::new() }
     }
 
     /// The barrier terms at coordinates `x` (every node) with the walls `walls` where they are;
@@ -479,9 +485,11 @@ impl BarrierContact {
         if self.quad_points > 0 {
             let (xis, ws) = gauss_legendre(self.quad_points);
             let n = x.len();
-            let mut xe = x.to_vec();
-            let mut slaves = Vec::with_capacity(self.segments.len() * xis.len());
-            let mut virt = Vec::with_capacity(slaves.capacity());
+            let (mut xe, mut slaves, mut virt) = (std::mem::take(&mut self.quad_x), std::mem::take(&mut self.quad_slaves), std::mem::take(&mut self.quad_virt));
+            xe.clear();
+            xe.extend_from_slice(x);
+            slaves.clear();
+            virt.clear();
             for (e, seg) in self.segments.iter().enumerate() {
                 let (c, d) = (x[seg.nodes[0]], x[seg.nodes[1]]);
                 for (j, &xi) in xis.iter().enumerate() {
@@ -524,6 +532,7 @@ impl BarrierContact {
                 let [n1, n2] = self.segments[s].nodes;
                 out.quads.push(QuadTerm { edge: e, segment: s, point: j, dofs: [2 * c, 2 * c + 1, 2 * d, 2 * d + 1, 2 * n1, 2 * n1 + 1, 2 * n2, 2 * n2 + 1], xi, region, distance, term });
             }
+            (self.quad_x, self.quad_slaves, self.quad_virt) = (xe, slaves, virt);
         }
         for (w, wall) in walls.iter().enumerate() {
             let n = unit(wall.normal);

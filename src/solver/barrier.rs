@@ -184,10 +184,6 @@ impl BarrierRun {
         self.mu > 0.0 || self.mu_walls.iter().any(|&m| m > 0.0)
     }
 
-    /// The dofs of the block of pair (node, segment).
-    pub fn pair_dofs(&self, pair: (usize, usize)) -> Vec<usize> {
-        self.contact.pair_dofs(pair)
-    }
 }
 
 impl Simulation {
@@ -199,7 +195,7 @@ impl Simulation {
             return Ok(());
         }
         b.pattern = pairs;
-        let dofs: Vec<Vec<usize>> = b.pattern.iter().map(|&p| b.pair_dofs(p)).collect();
+        let dofs: Vec<Vec<usize>> = b.pattern.iter().map(|&p| b.contact.pair_dofs(p)).collect();
         let sys = &mut self.sys;
         let changed = sys.assembler.set_terms(&mut sys.kk, &dofs, &[]);
         sys.maps.pairs = sys.assembler.block_map(&sys.kk, &dofs);
@@ -311,8 +307,12 @@ impl Simulation {
                 match fp.block {
                     Some(pair) => {
                         let i = b.pattern.binary_search(&pair).expect("the pattern holds every lagged pair");
-                        let h = top_left::<8>(&t.hess, fp.width);
-                        sys.maps.pairs.add(&mut sys.kk.values, i, &h);
+                        let mut h = [0.0; 64];
+                        let w = fp.width;
+                        for (r, row) in t.hess[..w].iter().enumerate() {
+                            h[r * w..(r + 1) * w].copy_from_slice(&row[..w]);
+                        }
+                        sys.maps.pairs.add(&mut sys.kk.values, i, &h[..w * w]);
                     }
                     None => {
                         let i = b.contact.nodes.binary_search_by_key(&fp.node, |&(n, _)| n).expect("a boundary node");
@@ -773,11 +773,6 @@ impl Simulation {
         }
         b.min_distance = d;
     }
-}
-
-/// The leading `width` × `width` block of an N × N matrix, row by row.
-fn top_left<const N: usize>(h: &[[f64; N]; N], width: usize) -> Vec<f64> {
-    (0..width).flat_map(|i| h[i][..width].iter().copied()).collect()
 }
 
 /// What projecting a pair's Hessian onto the PSD matrices adds to it: P(H) − H.

@@ -189,7 +189,7 @@ impl Simulation {
             // the pattern of the pairs within d̂ + h of the reference configuration
             let near = b.contact.candidates(&model.x0, b.contact.dhat + h);
             b.pattern = b.with_ties(near);
-            pair_dofs = b.pattern.iter().map(|&p| b.pair_dofs(p)).collect();
+            pair_dofs = b.pattern.iter().map(|&p| b.contact.pair_dofs(p)).collect();
             node_dofs = b.node_dofs.clone();
             assembler.set_terms(&mut kk, &pair_dofs, &[]);
             b.walls1 = model.wall_planes(0.0);
