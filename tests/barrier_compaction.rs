@@ -30,7 +30,7 @@
 
 use mpfem::case;
 use mpfem::model::Model;
-use mpfem::solver::{Simulation, StepReport, DESCENT_ITERATIONS};
+use mpfem::solver::{Simulation, StepReport, DESCENT_EASY};
 use std::path::Path;
 
 const JOB: &str = "jobs/compaction/discs_2x2_biaxial.toml";
@@ -98,7 +98,7 @@ fn run(text: &str) -> Run {
 /// that was not shortened to land on the stop solid ratio: a step that converged at the size
 /// it was tried grows the next one by `[time] growth` (up to `dt_max`) when it converged
 /// without a retry in at most `easy_iterations` Newton iterations, or descending on the
-/// potential in at most `DESCENT_ITERATIONS` times as many: in the one retry after its first
+/// potential in at most `DESCENT_EASY` times as many: in the one retry after its first
 /// attempt failed (one cut-back counted, the size kept), or from its start, the descent being
 /// on for good once a step has needed the retry (every step after the first with a
 /// cut-back); every other step keeps its size. Returns how many steps grew after a
@@ -115,7 +115,7 @@ fn check_step_growth(run: &Run) -> usize {
         // the descent on from the step's start, or its retry at the size (so on after it)
         let sticky = run.descended[k];
         let descended_at_size = if sticky { r.cutbacks == 0 } else { r.cutbacks == 1 && run.descended[k + 1] };
-        let easy = if descended_at_size { r.newton_iterations <= DESCENT_ITERATIONS * run.easy_iterations } else { r.cutbacks == 0 && r.newton_iterations <= run.easy_iterations };
+        let easy = if descended_at_size { r.newton_iterations <= DESCENT_EASY * run.easy_iterations } else { r.cutbacks == 0 && r.newton_iterations <= run.easy_iterations };
         let expected = if easy { (r.dt * run.growth).min(run.dt_max) } else { r.dt };
         assert!((run.tried[k + 1] / expected - 1.0).abs() < 1e-12, "step {} ({} iterations, {} cut-backs at dt {}, descending from its start: {sticky}): the next step tried {}, expected {}", r.step, r.newton_iterations, r.cutbacks, r.dt, run.tried[k + 1], expected);
         if easy && descended_at_size && r.newton_iterations > run.easy_iterations {

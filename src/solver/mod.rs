@@ -37,7 +37,7 @@ mod state;
 mod stepping;
 mod system;
 
-pub use barrier::DESCENT_ITERATIONS;
+pub use barrier::{DESCENT_EASY, DESCENT_ITERATIONS};
 pub use params::{NewtonKind, SolverSpec, TimeSpec};
 pub use report::{Clock, Compaction, Phase, PhaseScope, RunSummary, StepReport, Timing};
 pub use state::{BarrierState, PartitionTotals, RunState, SimScalars, SimState, Solution};

@@ -259,15 +259,15 @@ impl Simulation {
     /// With the barrier, a step that converged descending on the potential at the size it was
     /// tried (`descended_at_size`: from its start, the descent being on since an earlier
     /// step, or in the retry after its first attempt failed) counts with
-    /// [`super::barrier::DESCENT_ITERATIONS`] times the iterations, as the descent has that
-    /// many times the budget: the size was not what failed. Counted as a cut-back instead,
+    /// [`super::barrier::DESCENT_EASY`] times the iterations, as the descent has several times
+    /// the budget: the size was not what failed. Counted as a cut-back instead,
     /// the retry held every later step at the size of the last real cut-back, since in a
     /// rearranging packing nearly every first attempt fails (the 256 polygons of robustness
     /// case 12 at 0.0075 s for good, their 1,024 at 0.005 s, against a `dt_max` of 0.05 s).
     fn step_easy(&self, trial: &Trial, cutbacks: usize, descended_at_size: bool) -> bool {
         let counted = if self.barrier.is_some() { trial.first_iterations } else { trial.iterations };
         if descended_at_size {
-            return counted <= super::barrier::DESCENT_ITERATIONS * self.time.easy_iterations;
+            return counted <= super::barrier::DESCENT_EASY * self.time.easy_iterations;
         }
         cutbacks == 0 && counted <= self.time.easy_iterations
     }
