@@ -124,6 +124,9 @@ pub(super) struct BarrierRun {
     /// the solver cannot tell, as LU cannot): a converged step whose tangent was definite is a
     /// minimum, and [`Simulation::leave_saddle`] has nothing to look for.
     pub definite: bool,
+    /// Whether the line search turns the particles a Newton update rotates by their exact
+    /// rotation (`newton::turned_point`); off only to measure what it gains.
+    pub turn: bool,
 }
 
 /// The stiffness of a tie relative to the softest particle's Young's modulus: k = 100 E
@@ -153,7 +156,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true }
     }
 
     /// The round-off of the ties' forces, after ties were made.
@@ -399,6 +402,16 @@ impl Simulation {
         let x1 = self.coords(&moved);
         let Some(b) = self.barrier.as_ref() else { return 1.0 };
         b.contact.collision_free_step(&x0, &x1, &b.walls_at(b.alpha), &b.walls1)
+    }
+
+    /// Whether the straight path from `u0` to `u1` (every dof), the walls moving from progress
+    /// `alpha0` to `alpha1` through the step, meets no contact.
+    pub(super) fn chord_collision_free(&mut self, u0: &[f64], u1: &[f64], alpha0: f64, alpha1: f64) -> bool {
+        let _t = self.clock.scope(Phase::ContactSearch);
+        let x0 = self.coords(u0);
+        let x1 = self.coords(u1);
+        let Some(b) = self.barrier.as_ref() else { return true };
+        b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1)) >= 1.0
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged
