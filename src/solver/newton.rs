@@ -388,6 +388,7 @@ impl Simulation {
                     let a = alpha0 + eta * (1.0 - alpha0);
                     crossed = !self.chord_collision_free(&u0, u, alpha0, if a >= 1.0 - 1e-12 { 1.0 } else { a });
                     if crossed {
+                        tracing::debug!(eta, turns = turns.len(), "the turned point's chord meets a contact: backed off");
                         eta *= 0.5;
                         continue;
                     }
