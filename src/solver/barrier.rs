@@ -396,22 +396,20 @@ impl Simulation {
     /// node off every edge of another particle and in front of the walls, which move with it
     /// to their end-of-step positions (CCD with IPC's conservative rescaling).
     pub(super) fn barrier_step_limit(&mut self, u: &[f64], du: &[f64]) -> f64 {
-        let _t = self.clock.scope(Phase::ContactSearch);
-        let x0 = self.coords(u);
         let moved: Vec<f64> = u.iter().zip(du).map(|(a, b)| a + b).collect();
-        let x1 = self.coords(&moved);
-        let Some(b) = self.barrier.as_ref() else { return 1.0 };
-        b.contact.collision_free_step(&x0, &x1, &b.walls_at(b.alpha), &b.walls1)
+        let alpha = self.barrier.as_ref().map_or(1.0, |b| b.alpha);
+        self.collision_free_fraction(u, &moved, alpha, 1.0)
     }
 
-    /// Whether the straight path from `u0` to `u1` (every dof), the walls moving from progress
-    /// `alpha0` to `alpha1` through the step, meets no contact.
-    pub(super) fn chord_collision_free(&mut self, u0: &[f64], u1: &[f64], alpha0: f64, alpha1: f64) -> bool {
+    /// The largest fraction of the straight path from `u0` to `u1` (every dof), the walls
+    /// moving from progress `alpha0` to `alpha1` through the step, that meets no contact (CCD
+    /// with IPC's conservative rescaling; 1 when nothing meets along the whole path).
+    pub(super) fn collision_free_fraction(&mut self, u0: &[f64], u1: &[f64], alpha0: f64, alpha1: f64) -> f64 {
         let _t = self.clock.scope(Phase::ContactSearch);
         let x0 = self.coords(u0);
         let x1 = self.coords(u1);
-        let Some(b) = self.barrier.as_ref() else { return true };
-        b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1)) >= 1.0
+        let Some(b) = self.barrier.as_ref() else { return 1.0 };
+        b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1))
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged

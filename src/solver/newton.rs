@@ -333,7 +333,8 @@ impl Simulation {
             let barrier = self.barrier.is_some();
             // particles the update turns are turned exactly along the line search (a
             // linearised rotation θ × r changes a particle's area by θ², against its bulk
-            // stiffness)
+            // stiffness); `tangent` is the path's direction at the point tried (the update
+            // itself where nothing turns)
             let turns = if self.barrier.as_ref().is_some_and(|b| b.turn) { self.body_turns(&u0, &du_full) } else { Vec::new() };
             let mut tangent = du_full.clone();
             let (eta_max, alpha0, tries) = match self.barrier.as_ref() {
@@ -386,7 +387,7 @@ impl Simulation {
                 } else {
                     turned_point(&self.model.x0, &u0, &du_full, &turns, eta, u, &mut tangent);
                     let a = alpha0 + eta * (1.0 - alpha0);
-                    crossed = !self.chord_collision_free(&u0, u, alpha0, if a >= 1.0 - 1e-12 { 1.0 } else { a });
+                    crossed = self.collision_free_fraction(&u0, u, alpha0, if a >= 1.0 - 1e-12 { 1.0 } else { a }) < 1.0;
                     if crossed {
                         tracing::debug!(eta, turns = turns.len(), "the turned point's chord meets a contact: backed off");
                         eta *= 0.5;
@@ -422,7 +423,7 @@ impl Simulation {
                                 } else {
                                     self.sys.assembler.eq.iter().zip(&tangent).filter(|(&q, _)| q != FIXED).map(|(&q, t)| t * self.sys.r[q]).sum()
                                 };
-                                let line = line0.zip(self.contact_potential(u, if turns.is_empty() { &du_full } else { &tangent })).map(|((energy0, slope0), (energy, slope))| BarrierLine { energy0, slope0, energy, slope });
+                                let line = line0.zip(self.contact_potential(u, &tangent)).map(|((energy0, slope0), (energy, slope))| BarrierLine { energy0, slope0, energy, slope });
                                 alpha0 < 1.0 || barrier_descent(eta, g0, slope, line) || (rn <= r_old && (g0 <= 0.0 || within_round_off(eta, g0, slope, line)))
                             } else {
                                 rn < r_old || s < 0.9 * energy
