@@ -65,6 +65,18 @@ fn within_round_off(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>)
     barrier.is_some_and(|b| potential_change(eta, g0, slope, barrier).abs() <= 1e-10 * b.energy0.abs().max(b.energy.abs()))
 }
 
+/// How far through the step the walls are at a step η of a Newton update that started with
+/// them at `alpha0` (they move with the update the same fraction of the rest of their way),
+/// snapped to 1 (arrived) within round-off.
+fn wall_progress(alpha0: f64, eta: f64) -> f64 {
+    let a = alpha0 + eta * (1.0 - alpha0);
+    if a >= 1.0 - 1e-12 {
+        1.0
+    } else {
+        a
+    }
+}
+
 /// The rigid rotation a Newton update makes of one particle: the update's best-fit rotation
 /// θ about the particle's centroid c (least squares over its nodes).
 #[derive(Clone, Copy, Debug)]
@@ -386,8 +398,7 @@ impl Simulation {
                     }
                 } else {
                     turned_point(&self.model.x0, &u0, &du_full, &turns, eta, u, &mut tangent);
-                    let a = alpha0 + eta * (1.0 - alpha0);
-                    crossed = self.collision_free_fraction(&u0, u, alpha0, if a >= 1.0 - 1e-12 { 1.0 } else { a }) < 1.0;
+                    crossed = self.collision_free_fraction(&u0, u, alpha0, wall_progress(alpha0, eta)) < 1.0;
                     if crossed {
                         tracing::debug!(eta, turns = turns.len(), "the turned point's chord meets a contact: backed off");
                         eta *= 0.5;
@@ -398,8 +409,7 @@ impl Simulation {
                     c.lm.step(&self.sys.du[n_free..], eta);
                 }
                 if let Some(b) = self.barrier.as_mut() {
-                    let a = alpha0 + eta * (1.0 - alpha0);
-                    b.alpha = if a >= 1.0 - 1e-12 { 1.0 } else { a };
+                    b.alpha = wall_progress(alpha0, eta);
                 }
                 match self.evaluate(u, inc, vol, full) {
                     Ok(rn) => {
