@@ -642,3 +642,31 @@ fn metis_nested_dissection_ordering_matches_amd() {
         Err(e) => panic!("unexpected error {e}"),
     }
 }
+
+/// `SolverOptions::singular_tol` decides when a direct solve that refinement cannot bring to
+/// round-off is called singular. A 2 × 2 positive definite matrix with eigenvalues 1 and 1e-12
+/// (eigenvectors at 45°) and a right-hand side along its soft eigenvector: the solution is
+/// 1e12 times the right-hand side, and forming b − Ax cancels digits, so the relative residual
+/// of an exact-as-floating-point solve is far above round-off (about 1e-5, a closed-form
+/// consequence of ε‖A‖‖x‖/‖b‖ ≈ 1e-16 · 1e12). With the linear algebra's default limit (1e-6)
+/// that is an error; with the limit the Newton solves use (1e-3,
+/// `mpfem::solver::NEWTON_SOLVE_TOL`) the same solve is returned, and its answer is the exact
+/// solution to the accuracy the conditioning allows (1e-3 relative).
+#[test]
+fn the_singular_limit_of_a_direct_solve_is_an_option() {
+    let lam = 1e-12;
+    let a = csr_from_entries(2, &[vec![(0, 0.5 * (1.0 + lam)), (1, 0.5 * (1.0 - lam))], vec![(0, 0.5 * (1.0 - lam)), (1, 0.5 * (1.0 + lam))]]);
+    let c = 0.5f64.sqrt();
+    let b = [-c, c];
+    for kind in [LinearSolverKind::Cholesky, LinearSolverKind::Lu] {
+        let loose = SolverOptions { kind, singular_tol: mpfem::solver::NEWTON_SOLVE_TOL, ..Default::default() };
+        let (x, st) = run(make_solver(&loose).as_mut(), &a, &b).unwrap_or_else(|e| panic!("{kind:?} with the Newton limit: {e}"));
+        assert!(st.relative_residual > 1e-6 && st.relative_residual <= 1e-3, "{kind:?}: relative residual {:e} (the check would be vacuous below 1e-6)", st.relative_residual);
+        let exact = [-c / lam, c / lam];
+        for i in 0..2 {
+            assert!((x[i] / exact[i] - 1.0).abs() < 1e-3, "{kind:?}: x[{i}] = {} against {}", x[i], exact[i]);
+        }
+        let strict = SolverOptions { kind, ..Default::default() };
+        assert!(matches!(run(make_solver(&strict).as_mut(), &a, &b), Err(LinalgError::Singular(_))), "{kind:?}: the default limit of 1e-6 must report the same solve singular");
+    }
+}

@@ -93,6 +93,9 @@ pub struct SolverOptions {
     /// Whether the matrices will be symmetric (the Schwarz preconditioner then runs CG,
     /// otherwise GMRES).
     pub symmetric: bool,
+    /// A direct solve whose relative residual ‖b − Ax‖/‖b‖ stays above this after its
+    /// iterative refinement reports the matrix singular ([`direct::Refinement::singular_tol`]).
+    pub singular_tol: f64,
 }
 
 impl Default for SolverOptions {
@@ -105,6 +108,7 @@ impl Default for SolverOptions {
             threads: 1,
             ordering: direct::FillOrdering::Amd,
             symmetric: true,
+            singular_tol: direct::Refinement::default().singular_tol,
         }
     }
 }
@@ -177,6 +181,7 @@ pub fn make_solver_with(
     subdomains: schwarz::Subdomains,
     comm: std::sync::Arc<dyn crate::comm::Collective>,
 ) -> Box<dyn LinearSolver> {
+    let refinement = direct::Refinement { singular_tol: opts.singular_tol, ..Default::default() };
     match opts.kind {
         LinearSolverKind::Pcg if opts.preconditioner == Preconditioner::Schwarz => {
             let s = schwarz::SchwarzPcg::new(subdomains, comm, opts.pcg_tol, opts.pcg_max_iterations, opts.threads);
@@ -190,8 +195,8 @@ pub fn make_solver_with(
         // outside it 4.3 times, most of it system time), the same on case 13's loose start
         // (1,024 polygons, docs/robustness.md, eleventh measurement) — and one thread makes a
         // run's path the same on any number of them
-        LinearSolverKind::Lu => Box::new(direct::FaerLu::new(1)),
-        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(1).with_ordering(opts.ordering)),
+        LinearSolverKind::Lu => Box::new(direct::FaerLu::new(1).with_refinement(refinement)),
+        LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(1).with_ordering(opts.ordering).with_refinement(refinement)),
         LinearSolverKind::Pcg => Box::new(pcg::Pcg::new(
             opts.preconditioner,
             opts.pcg_tol,

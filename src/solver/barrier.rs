@@ -60,10 +60,6 @@ pub(super) const SHIFT_MIN: f64 = 1e-10;
 /// step still stops after `max_iterations` cut updates ([`NewtonFailure::ContactLimited`]).
 pub const DESCENT_ITERATIONS: usize = 20;
 
-/// A step that converged in the descent's retry at its size counts as easy for the step-size
-/// growth with this many times `[time] easy_iterations` ([`Simulation::step_easy`]).
-pub const DESCENT_EASY: usize = 4;
-
 /// The barrier contact of a simulation and its state within a step.
 #[derive(Debug)]
 pub(super) struct BarrierRun {

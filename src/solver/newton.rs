@@ -148,7 +148,6 @@ impl Simulation {
         let t = inc.time;
         let mut lambda = self.sol.lambda.clone();
         let mut iterations = 0;
-        let mut first_iterations = None;
         let mut updates = 0;
         let mut first = true;
         loop {
@@ -167,7 +166,6 @@ impl Simulation {
             };
             first = false;
             iterations += its;
-            first_iterations.get_or_insert(its);
             // the fields of the other processes' elements (for the updates below and the commit)
             if let Some(p) = &self.sys.par {
                 p.sync_fields(&mut self.sys.trial_fields);
@@ -192,7 +190,7 @@ impl Simulation {
                 if worst > self.spec.volume_tol {
                     tracing::warn!(worst, tol = self.spec.volume_tol, "volume constraint not met after the allowed updates");
                 }
-                return Ok(Trial { u, lambda, worst, iterations, first_iterations: first_iterations.unwrap_or(its), updates, residual: res });
+                return Ok(Trial { u, lambda, worst, iterations, updates, residual: res });
             }
             for e in 0..self.incompressible.len() {
                 if self.incompressible[e] {

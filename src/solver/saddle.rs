@@ -93,7 +93,6 @@ impl Simulation {
                     let change = t.u.iter().zip(&trial.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
                     tracing::debug!(time = inc.time, departure, iterations = t.iterations, change, eta, "saddle left and minimised again");
                     t.iterations += trial.iterations;
-                    t.first_iterations = trial.first_iterations;
                     t.updates += trial.updates;
                     trial = t;
                     moved = true;
