@@ -53,19 +53,18 @@ pub struct StabilisationParams {
     pub regularisation: f64,
 }
 
-/// The default ζ of the springs with the barrier contact (the penalty methods' default is
-/// 1e-5, [`StabilisationParams::default`]), measured on the robustness suite
-/// (`jobs/robustness/`, docs/robustness.md, twelfth measurement). At 1e-7 the springs took
-/// 1.74 % of the wall work on the 256 random polygons of case 12 (0.01–0.40 % on the cases
-/// of up to 64 particles); at 1e-8, 0.34 % on case 12, 0.90 % on the 1,024 polygons of case
-/// 13 (thirteenth measurement) and at most 0.04 % on the others, every case reaching its end, at 1.75 times case 12's Newton iterations and 1.28 times the suite's
-/// linear solves. Their work is spent where the packing jams (case 12: 0.91–0.94), where the
-/// step-size control cuts the steps until the springs, stiffening as a fixed mass, hold the
-/// rearranging particles; with a ζ ten times smaller the steps there are about three times
-/// shorter and the work five times smaller. (Earlier: 1e-6 put two of ten cases above 1 %.
-/// Later, 1e-9: the octagon grids' snaps were gone, but the suite's random packings took up
-/// to twice the steps and case 12 crawled in its loose phase; eighteenth measurement.)
-pub const BARRIER_STABILISATION: f64 = 1e-8;
+/// The default ρ of the barrier contact, whose springs are off by default (ζ = 0): the
+/// elements' nodal stiffness E a / h² times 1e-8 is added to the diagonal of the tangent only,
+/// so a particle that touches nothing, or a rigid-body mode the barrier barely holds, leaves
+/// the Newton system regular, while the residual — and so the solution and the reported
+/// `stabilisation_energy` — has no springs in it, whatever the step size
+/// (docs/robustness.md, twenty-fourth measurement). Springs in the residual (ζ = 1e-8, anchored
+/// where each step starts, the default until then) did work that grew with the step: 0.082 %
+/// of the wall work on the 256 random polygons of robustness case 12 with steps of 0.015 s,
+/// 0.21 % with steps of 0.05 s, and 2.2 % on the 1,024 of case 13 with the larger steps. The
+/// tangent-only term at the same size took case 12 to 0.95 in 1,102 Newton iterations against
+/// 2,122 with the springs (both with steps grown to `dt_max`).
+pub const BARRIER_REGULARISATION: f64 = 1e-8;
 
 impl Default for StabilisationParams {
     fn default() -> Self {

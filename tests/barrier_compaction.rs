@@ -239,6 +239,30 @@ fn biaxial_discs_tied_with_the_barrier() {
     assert!(share <= 0.01, "the springs took {:.2} % of the wall work", 100.0 * share);
 }
 
+/// A loose frictional packing with the defaults: robustness case 03 (16 random Voronoi
+/// polygons, μ = 0.2, compacted biaxially from 0.75 to 0.95). Its walls load nothing until
+/// about 0.92, so the forces up to there are round-off sized; measured against themselves
+/// (before the reference force had a floor, `LOAD_FLOOR` in src/solver/barrier.rs) a polygon
+/// sliding under 5e-8 N of out-of-balance force was never in equilibrium and the steps were
+/// cut to 2e-5 s. With `dt_min` raised to 1e-3 s that would fail the run. Checked: the target
+/// reached with no crossing or inverted element in any converged state, and the springs off
+/// by default (their stiffness on the tangent only), so no work went into them at all.
+#[test]
+fn a_loose_frictional_packing_compacts_without_springs() {
+    let text = std::fs::read_to_string("jobs/robustness/03_voronoi_polygons_16_biaxial_mu02.toml").unwrap();
+    let text = text.replacen("dt_min = 1e-05\n", "dt_min = 1e-3\n", 1);
+    assert!(text.contains("dt_min = 1e-3\n") && text.contains("friction = 0.2"), "the case changed");
+    let r = run(&text);
+    assert_eq!(r.stop, "solid ratio reached");
+    assert_eq!(r.crossings, 0, "boundary nodes inside another particle or behind a wall");
+    assert_eq!(r.inverted, 0, "inverted elements in converged states");
+    let last = r.reports.last().unwrap().compaction.clone().unwrap();
+    assert!(last.solid_ratio >= 0.95 - 1e-9, "{}", last.solid_ratio);
+    assert_eq!(last.stabilisation_energy, 0.0, "no springs in the residual by default");
+    assert!(last.external_work > 0.0);
+    eprintln!("case 03: {} steps, {} Newton iterations, pressures at 0.95 {:?} MPa", r.reports.len(), r.reports.iter().map(|s| s.newton_iterations).sum::<usize>(), pressures_at(&r.reports, 0.95));
+}
+
 /// The barrier's tangent is symmetric whatever the kind of contact (its barrier, lagged
 /// friction and ties are potentials, whose Hessians the conformance battery checks against
 /// finite differences), and so are the J2 and elastic particles' (their updates are

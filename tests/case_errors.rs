@@ -593,8 +593,8 @@ fn contact_normal_is_segment_or_smoothed() {
     assert_has(&e, &["value \"curved\"", "\"segment\"", "\"smoothed\""]);
 }
 
-/// The barrier is the default contact method, with its softer springs that stiffen on a
-/// cut-back; the keys of the node-to-segment methods are an error with it (given or by default),
+/// The barrier is the default contact method, with a tangent-only regularisation instead of
+/// springs; the keys of the node-to-segment methods are an error with it (given or by default),
 /// naming the key, the value and what was expected, not a silent no-op.
 #[test]
 fn barrier_is_the_default_and_refuses_node_to_segment_keys() {
@@ -602,12 +602,18 @@ fn barrier_is_the_default_and_refuses_node_to_segment_keys() {
     for text in [BASE.to_string(), format!("{BASE}\n[contact]\ncontact = \"sliding\"\n")] {
         let c = parse(&text).unwrap();
         assert_eq!(c.contact.method, ContactMethod::Barrier);
-        assert!(c.stabilisation.stiffen_on_cutback);
-        assert_eq!(c.stabilisation.factor, mpfem::stabilise::BARRIER_STABILISATION);
+        // no springs in the residual, their stiffness in the tangent only
+        assert_eq!(c.stabilisation.factor, 0.0);
+        assert_eq!(c.stabilisation.regularisation, mpfem::stabilise::BARRIER_REGULARISATION);
     }
+    // the keys still set springs and the regularisation with the barrier
+    let keyed = parse(&format!("{BASE}\n[contact]\nstabilisation = 1e-7\nregularisation = 0.0\n")).unwrap();
+    assert_eq!(keyed.stabilisation.factor, 1e-7);
+    assert_eq!(keyed.stabilisation.regularisation, 0.0);
     let penalty = parse(&format!("{BASE}\n[contact]\nmethod = \"penalty\"\n")).unwrap();
     assert_eq!(penalty.contact.method, ContactMethod::Penalty);
     assert!(!penalty.stabilisation.stiffen_on_cutback);
+    assert_eq!((penalty.stabilisation.factor, penalty.stabilisation.regularisation), (1e-5, 0.0));
     for (key, value) in [
         ("penalty", "1500.5"),
         ("penetration_tol", "0.001"),

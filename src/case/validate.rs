@@ -1278,12 +1278,17 @@ impl Cx<'_> {
         // the barrier's springs are a fictitious inertia: their stiffness grows as 1/Δt² on a
         // cut-back, as the inertia term of an implicit step does (see docs/case-file.md)
         stab.stiffen_on_cutback = c.stiffen_on_cutback.unwrap_or(spec.method == ContactMethod::Barrier);
-        // and a thousand times softer than the penalty methods' by default: the barrier's
-        // Newton converges with less help, and the springs' share of the wall work on the
-        // robustness suite is at most 0.90 % (the 1,024 polygons; 1e-7: 1.74 % on the 256),
-        // at more steps (`stabilise::BARRIER_STABILISATION`, docs/robustness.md)
-        if c.stabilisation.is_none() && spec.method == ContactMethod::Barrier {
-            stab.factor = crate::stabilise::BARRIER_STABILISATION;
+        // with the barrier no springs in the residual by default, only their stiffness in the
+        // tangent: a free particle's system stays regular, the solution is the equilibrium
+        // itself and the springs do no work, however large the steps
+        // (`stabilise::BARRIER_REGULARISATION`, docs/robustness.md, twenty-fourth measurement)
+        if spec.method == ContactMethod::Barrier {
+            if c.stabilisation.is_none() {
+                stab.factor = 0.0;
+            }
+            if c.regularisation.is_none() {
+                stab.regularisation = crate::stabilise::BARRIER_REGULARISATION;
+            }
         }
         if let Some(v) = c.regularisation {
             stab.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;

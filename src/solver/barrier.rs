@@ -38,8 +38,8 @@ const SMALL_SHIFT: f64 = 1e-4;
 
 /// The smallest relative shift τ tried ([`Simulation::shift_until_definite`]). The shift adds
 /// τ s_i to every diagonal entry, also those of the particles that nothing but the
-/// stabilisation springs hold (ζ = 1e-8 of the elements' stiffness,
-/// `stabilise::BARRIER_STABILISATION`): where τ s_i is larger
+/// tangent's regularisation holds (ρ = 1e-8 of the elements' stiffness,
+/// `stabilise::BARRIER_REGULARISATION`): where τ s_i is larger
 /// than a particle's own stiffness, Newton moves it by only the fraction k / (k + τ s) of the
 /// way to its equilibrium an iteration. Starting the shifts at 1e-6 held the retries of
 /// robustness case 12 (256 polygons) for 40–80 iterations on one loose particle each,
@@ -100,6 +100,8 @@ pub(super) struct BarrierRun {
     /// Forces below this are round-off: 1e-13 K L with K the largest shear modulus or bulk
     /// penalty (incompressible particles) and L the square root of the particles' area (N/mm).
     pub stiffness_floor: f64,
+    /// The smallest reference force of the relative residual, [`LOAD_FLOOR`] E L (N/mm).
+    pub load_floor: f64,
     /// The contact state per node of the last converged step, for the results files
     /// ([`Simulation::barrier_nodal`]).
     pub nodal: NodalContact,
@@ -134,6 +136,18 @@ pub const TIE_STIFFNESS: f64 = 100.0;
 /// size (the tied blocks of `jobs/verification/` then match one block to 1e-6).
 pub const TIE_TOL: f64 = 1e-10;
 
+/// The relative residual's reference force is never below `LOAD_FLOOR` E L, E the softest
+/// particle's Young's modulus and L the square root of the particles' area: the force that
+/// strains the whole assembly elastically by 1 %. Until a packing carries a load its forces
+/// are round-off sized, and measured against themselves a loose particle that slides under a
+/// lagged friction force or drifts towards a gap of d̂, held by nothing but the tangent's
+/// regularisation, was never in equilibrium: robustness cases 03 and 06 (μ = 0.2) crawled at
+/// Δt = 2e-5 s with out-of-balance forces of 5e-8 N, case 08 (asphalt discs, μ = 0.1) ran
+/// 1,500–1,900 iterations a step with 4e-6 N (1e-3 E L was not enough there). With the
+/// default `residual_tol` of 1e-8 the out-of-balance forces are then within 1e-10 E L, an
+/// error of about 1e-10 E in a wall pressure (docs/robustness.md, twenty-fourth measurement).
+pub const LOAD_FLOOR: f64 = 1e-2;
+
 /// At most this many multiplier updates of the ties a step.
 pub const MAX_TIE_UPDATES: usize = 20;
 
@@ -152,7 +166,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true }
     }
 
     /// The round-off of the ties' forces, after ties were made.

@@ -283,6 +283,8 @@ impl Simulation {
             // other methods, and compressible particles, keep G (their results unchanged)
             let k_max = kappa.iter().zip(&incompressible).filter(|(_, &i)| i).map(|(&k, _)| k).fold(g_max, f64::max);
             b.stiffness_floor = 1e-13 * k_max * area0_total.abs().sqrt();
+            let e_min = model.bodies.iter().map(|body| model.materials[body.material].youngs_modulus()).fold(f64::INFINITY, f64::min);
+            b.load_floor = if e_min.is_finite() { barrier::LOAD_FLOOR * e_min * area0_total.abs().sqrt() } else { 0.0 };
         }
         let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne], j0: vec![1.0; ne] };
         let dynamics = Dynamics::from_model(time.integrator, &model);

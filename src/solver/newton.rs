@@ -571,10 +571,12 @@ impl Simulation {
     }
 
     /// Reference force for the relative residual: the larger of ‖F_ext‖ and ‖F_int‖ over all
-    /// dofs (which includes the reactions), never below round-off.
+    /// dofs (which includes the reactions), never below round-off (with the barrier, never
+    /// below the load floor 1e-2 E L of an assembly that carries nothing yet, `barrier::LOAD_FLOOR`).
     pub(super) fn reference_force(&self) -> f64 {
         let n = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        n(&self.sys.f_ext).max(n(&self.sys.f_int)).max(self.sys.f_elem_norm).max(self.run.force_floor)
+        let load = self.barrier.as_ref().map_or(0.0, |b| b.load_floor);
+        n(&self.sys.f_ext).max(n(&self.sys.f_int)).max(self.sys.f_elem_norm).max(self.run.force_floor).max(load)
     }
 }
 
