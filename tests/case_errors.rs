@@ -606,10 +606,12 @@ fn barrier_is_the_default_and_refuses_node_to_segment_keys() {
         assert_eq!(c.stabilisation.factor, 0.0);
         assert_eq!(c.stabilisation.regularisation, mpfem::stabilise::BARRIER_REGULARISATION);
     }
-    // the keys still set springs and the regularisation with the barrier
-    let keyed = parse(&format!("{BASE}\n[contact]\nstabilisation = 1e-7\nregularisation = 0.0\n")).unwrap();
-    assert_eq!(keyed.stabilisation.factor, 1e-7);
-    assert_eq!(keyed.stabilisation.regularisation, 0.0);
+    // the keys still set springs and the regularisation with the barrier; springs asked for
+    // come without the default regularisation
+    let keyed = parse(&format!("{BASE}\n[contact]\nstabilisation = 1e-7\nregularisation = 2e-8\n")).unwrap();
+    assert_eq!((keyed.stabilisation.factor, keyed.stabilisation.regularisation), (1e-7, 2e-8));
+    let springs = parse(&format!("{BASE}\n[contact]\nstabilisation = 1e-7\n")).unwrap();
+    assert_eq!((springs.stabilisation.factor, springs.stabilisation.regularisation), (1e-7, 0.0));
     let penalty = parse(&format!("{BASE}\n[contact]\nmethod = \"penalty\"\n")).unwrap();
     assert_eq!(penalty.contact.method, ContactMethod::Penalty);
     assert!(!penalty.stabilisation.stiffen_on_cutback);

@@ -1282,13 +1282,11 @@ impl Cx<'_> {
         // tangent: a free particle's system stays regular, the solution is the equilibrium
         // itself and the springs do no work, however large the steps
         // (`stabilise::BARRIER_REGULARISATION`, docs/robustness.md, twenty-fourth measurement)
-        if spec.method == ContactMethod::Barrier {
-            if c.stabilisation.is_none() {
-                stab.factor = 0.0;
-            }
-            if c.regularisation.is_none() {
-                stab.regularisation = crate::stabilise::BARRIER_REGULARISATION;
-            }
+        // (springs asked for by the key regularise the tangent themselves: ρ on top of them
+        // would make Newton take only part of their pull an iteration)
+        if spec.method == ContactMethod::Barrier && c.stabilisation.is_none() {
+            stab.factor = 0.0;
+            stab.regularisation = crate::stabilise::BARRIER_REGULARISATION;
         }
         if let Some(v) = c.regularisation {
             stab.regularisation = self.num("contact.regularisation", v, v >= 0.0, "a regularisation factor >= 0")?;
