@@ -19,7 +19,8 @@
 //! The pairs of the barrier change with every iterate. The pattern holds a block for every
 //! node–edge pair closer than d̂ + h (h the smallest element size) at the start of the step,
 //! and grows (incrementally, [`crate::assembly::Assembler::set_terms`]) when an iterate brings
-//! a pair within d̂ that it does not hold; wall pairs use the nodes' own diagonal blocks.
+//! a pair within d̂ that it does not hold, by every pair within d̂ + h of that iterate; wall
+//! pairs use the nodes' own diagonal blocks.
 
 use super::state::BarrierState;
 use super::{NewtonFailure, Phase, Simulation};
@@ -31,10 +32,6 @@ use crate::contact::{ContactStats, NodalContact, Wall};
 /// Whether the pair Hessians are projected onto the PSD matrices in every solve (in the retry
 /// of a failed step they are where the tangent is indefinite, [`Simulation::factor_descent`]).
 const PROJECT: bool = false;
-
-/// The largest relative shift τ of an indefinite tangent's diagonal in the retry of a failed
-/// step before the pairs' Hessians are projected instead ([`Simulation::factor_descent`]).
-const SMALL_SHIFT: f64 = 1e-4;
 
 /// The smallest relative shift τ tried ([`Simulation::shift_until_definite`]). The shift adds
 /// τ s_i to every diagonal entry, also those of the particles that nothing but the
@@ -283,8 +280,14 @@ impl Simulation {
             let c = &b.contact;
             let missing: Vec<(usize, usize)> = b.eval.edges.iter().map(|e| (e.node, e.segment)).chain(b.eval.quads.iter().map(|q| (c.edge_key(q.edge), q.segment))).filter(|p| b.pattern.binary_search(p).is_err()).collect();
             if !missing.is_empty() {
+                // (with every pair within d̂ + h of this iterate, as at the start of a step, so
+                // that the next iterates seldom grow it again: each growth assembles the
+                // pattern anew and analyses it again, 10 % of a 256-polygon compaction when
+                // only the missing pairs were added, docs/robustness.md)
+                let reach = b.contact.dhat + if b.h_min.is_finite() { b.h_min } else { 0.0 };
                 let mut pairs = b.pattern.clone();
                 pairs.extend(missing);
+                pairs.extend(b.contact.candidates(x, reach));
                 pairs.sort_unstable();
                 pairs.dedup();
                 tracing::debug!(pairs = pairs.len(), "barrier pattern grows");
@@ -592,27 +595,36 @@ impl Simulation {
     /// other the barrier's Hessian has a negative curvature of the order of the force over the
     /// gap, and Newton with the exact tangent circled there (robustness case 08). A tangent
     /// the Cholesky factorisation finds indefinite, or that fails to factor outright, is made
-    /// definite in three stages, each tried only when the one before did not do it:
-    /// 1. a small shift of the diagonal (Levenberg–Marquardt, [`Simulation::shift_until_definite`]
-    ///    from τ = [`SHIFT_MIN`] up to τ = [`SMALL_SHIFT`]), which changes the update little;
-    /// 2. each barrier pair's Hessian replaced by its projection onto the PSD matrices
+    /// definite in two stages, the second tried only when the first did not do it:
+    /// 1. each barrier pair's Hessian replaced by its projection onto the PSD matrices
     ///    ([`Simulation::project_pair_hessians`]): a node facing another particle's corner
     ///    has a negative curvature of the order of its force over the gap for sliding past
     ///    it (the point–point distance's Hessian is (I − n nᵀ)/d), and the projection removes
-    ///    it where it arises, while a shift large enough to cover it slows every dof;
-    /// 3. a shift of the projected tangent up to τ = 1 (definite by Gershgorin).
+    ///    it where it arises, while a shift large enough to cover it slows every dof (on the
+    ///    2 × 2 biaxial discs with d̂/2 a shift alone took τ = 0.1, converged linearly, the
+    ///    residual falling by 0.88 an iteration, and failed a step; `tests/barrier_compaction.rs`);
+    /// 2. a shift of the projected tangent's diagonal (Levenberg–Marquardt,
+    ///    [`Simulation::shift_until_definite`], from a tenth of the last τ that worked in this
+    ///    attempt, or [`SHIFT_MIN`], up to τ = 1, definite by Gershgorin): what the elements
+    ///    themselves lack, a compressed J2 or Hencky element's geometric stiffness.
     ///
-    /// Measured: on the 2 × 2 biaxial discs with d̂/2 the shift alone took τ = 0.1, converged
-    /// linearly (the residual fell by 0.88 an iteration) and failed a step
-    /// (`tests/barrier_compaction.rs`); with the projection the retries converge. Projecting
-    /// at once instead of stage 1 put 8.5–9.7 % of the wall work into the springs on the
-    /// near-rigid ellipses of robustness case 10 (0.12 % with the small shift, which is all
-    /// that case needs: τ ≤ 1e-5), and projecting in every iteration of the retry, also where
-    /// the tangent is definite, doubled the steps of cases 01 and 02 (a tangent that is
-    /// definite as it is stays exact, so Newton converges quadratically once the iterate has
-    /// left the saddle). At a minimum the tangent is positive definite and Newton is
-    /// unchanged, so is the solution. On several processes the solving one's finding is
-    /// broadcast, so that all take the same shifts.
+    /// A tangent that is definite as it is stays exact, so Newton converges quadratically once
+    /// the iterate has left the saddle (projecting in every iteration of the retry, also where
+    /// the tangent is definite, raised the iterations of robustness cases 01–08 by 1.3–2.6
+    /// times, twenty-fifth measurement). At a minimum the tangent is positive definite and
+    /// Newton is unchanged, so is the solution. On several processes the solving one's finding
+    /// is broadcast, so that all take the same shifts.
+    ///
+    /// Until the twenty-fifth measurement (docs/robustness.md) a small shift, τ up to 1e-4,
+    /// came first and the projection second: with the stabilisation springs in the residual,
+    /// projecting first had put 8.5–9.7 % of the wall work into the springs on the near-rigid
+    /// ellipses of robustness case 10. Without the springs the order costs only factorisations:
+    /// in the dense steps of a 256-polygon compaction nearly every tangent is indefinite, and
+    /// the small shifts failed one to three factorisations before the one that held; with the
+    /// projection first (and the two changes of the same measurement, the pattern's growth
+    /// and the projection's size) that compaction took 909 iterations instead of 1,031, in
+    /// 0.66 of the time, and the eleven cases of the suite 10,717 instead of 11,829
+    /// (docs/robustness.md, twenty-fifth measurement).
     ///
     /// The descent starts with the retry of the first step that fails without it (and stays
     /// on from then, [`BarrierRun::descent`]): shifting from the first step changed which
@@ -638,22 +650,18 @@ impl Simulation {
             return Ok(());
         }
         self.note_definite(false, false);
-        let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
-        let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
-        let shifted = self.shift_until_definite(start, SMALL_SHIFT);
-        if let Some(b) = self.barrier.as_mut() {
-            // (after a shift that did not do it, the next tangent's shifts start near its top)
-            b.shift = shifted.unwrap_or(SMALL_SHIFT);
-        }
-        if shifted.is_some() {
-            return Ok(());
-        }
         self.project_pair_hessians();
         if self.factor_definite() {
             tracing::debug!("indefinite tangent made definite by projecting the pairs' Hessians");
             return Ok(());
         }
-        if self.shift_until_definite(1e-6, 1.0).is_some() {
+        let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
+        let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
+        let shifted = self.shift_until_definite(start, 1.0);
+        if let Some(b) = self.barrier.as_mut() {
+            b.shift = shifted.unwrap_or(0.0);
+        }
+        if shifted.is_some() {
             return Ok(());
         }
         tracing::debug!("indefinite tangent kept: neither the projection nor a shift made it definite");
@@ -680,15 +688,16 @@ impl Simulation {
         if !self.sys.comm.is_root() {
             return;
         }
+        let _t = self.clock.scope(Phase::ContactAssembly);
         let Some(b) = self.barrier.as_ref() else { return };
         let sys = &mut self.sys;
         for e in &b.eval.edges {
-            let delta = projection_change(&e.term.hess);
+            let delta = projection_change::<6, 4>(&e.term.hess);
             let i = b.pattern.binary_search(&(e.node, e.segment)).expect("the pattern holds every pair within d̂");
             sys.maps.pairs.add(&mut sys.kk.values, i, delta.as_flattened());
         }
         for q in &b.eval.quads {
-            let delta = projection_change(&q.term.hess);
+            let delta = projection_change::<8, 6>(&q.term.hess);
             let i = b.pattern.binary_search(&(b.contact.edge_key(q.edge), q.segment)).expect("the pattern holds every pair within d̂");
             sys.maps.pairs.add(&mut sys.kk.values, i, delta.as_flattened());
         }
@@ -807,9 +816,9 @@ impl Simulation {
 }
 
 /// What projecting a pair's Hessian onto the PSD matrices adds to it: P(H) − H.
-fn projection_change<const N: usize>(hess: &[[f64; N]; N]) -> [[f64; N]; N] {
+fn projection_change<const N: usize, const M: usize>(hess: &[[f64; N]; N]) -> [[f64; N]; N] {
     let mut delta = *hess;
-    crate::contact::barrier::project_psd(&mut delta);
+    crate::contact::barrier::project_psd_relative::<N, M>(&mut delta);
     for (row, h) in delta.iter_mut().zip(hess) {
         for (v, h) in row.iter_mut().zip(h) {
             *v -= h;
