@@ -184,9 +184,12 @@ impl Simulation {
             crate::contact::ContactKind::Rubbing { mu } => mu.max(0.0),
             _ => 0.0,
         };
+        // each particle's Young's modulus, and the softest
+        let body_e: Vec<f64> = model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).collect();
+        let e_min = body_e.iter().copied().fold(f64::INFINITY, f64::min);
         // cohering particles with the barrier: ties of stiffness 100 E (softest particle)
         let tie_stiffness = if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
-            barrier::TIE_STIFFNESS * model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).fold(f64::INFINITY, f64::min)
+            barrier::TIE_STIFFNESS * e_min
         } else {
             0.0
         };
@@ -219,7 +222,6 @@ impl Simulation {
         }
         let maps = TermMaps { pairs: assembler.block_map(&kk, &pair_dofs), multipliers: assembler.multiplier_map(&kk, &multiplier_dofs), ..Default::default() };
         // stabilisation springs ζ E a / h² on every dof of a contact problem
-        let body_e: Vec<f64> = model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).collect();
         let body_h: Vec<f64> = model.bodies.iter().map(|b| b.contact_h).collect();
         let body_nodes: Vec<_> = model.bodies.iter().map(|b| b.node_offset..b.node_offset + b.mesh.nodes.len()).collect();
         let springs = Springs::new(&model.x0, &model.elements, &model.elem_body, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some() || barrier.is_some());
@@ -283,7 +285,6 @@ impl Simulation {
             // other methods, and compressible particles, keep G (their results unchanged)
             let k_max = kappa.iter().zip(&incompressible).filter(|(_, &i)| i).map(|(&k, _)| k).fold(g_max, f64::max);
             b.stiffness_floor = 1e-13 * k_max * area0_total.abs().sqrt();
-            let e_min = model.bodies.iter().map(|body| model.materials[body.material].youngs_modulus()).fold(f64::INFINITY, f64::min);
             b.load_floor = if e_min.is_finite() { barrier::LOAD_FLOOR * e_min * area0_total.abs().sqrt() } else { 0.0 };
         }
         let sol = Solution { time: 0.0, u: vec![0.0; n_dofs], fields: ElementFields::new(ne), lambda: vec![0.0; ne], j0: vec![1.0; ne] };
