@@ -239,8 +239,8 @@ pub fn barrier_term<const N: usize>(d: &SqDistance<N>, dhat: f64, kappa: f64, pr
 /// Replace a symmetric matrix by its projection onto the positive semi-definite cone (negative
 /// eigenvalues set to zero), in place. The eigen-decomposition is the cyclic Jacobi method on
 /// the stack (no allocation; N ≤ 8 here), stopped when the off-diagonal part is within 1e-13 of
-/// the norm (the eigenvalues then within about that of the norm, a tangent's accuracy; the
-/// share of the projections in a run at 1e-15: docs/robustness.md, twenty-fifth measurement).
+/// the norm: the eigenvalues are then within about that of the norm, a tangent's accuracy
+/// (until the twenty-fifth measurement of docs/robustness.md it was 1e-15).
 pub fn project_psd<const N: usize>(h: &mut [[f64; N]; N]) {
     let mut a = [[0.0; N]; N];
     for i in 0..N {
@@ -303,8 +303,9 @@ pub fn project_psd<const N: usize>(h: &mut [[f64; N]; N]) {
 /// Hessian vanishes along the two translations, and the eigen-decomposition is made on the
 /// orthogonal complement, `M = N − 2` wide (Helmert's contrasts between the points, times the
 /// two directions), with the translations' eigenvalues zero. Measured on a 256-polygon
-/// compaction whose tangent is mostly indefinite (docs/robustness.md), the projections of the
-/// 6 × 6 and 8 × 8 pair Hessians took 19 % of the run on the full matrices.
+/// compaction whose tangent is mostly indefinite (docs/robustness.md, twenty-fifth
+/// measurement), the projections took 18.9 % of its first 80 s on the whole 6 × 6 and 8 × 8
+/// matrices and 7.2 % of its first 60 s on the reduced ones.
 pub fn project_psd_relative<const N: usize, const M: usize>(h: &mut [[f64; N]; N]) {
     assert!(N == M + 2 && N % 2 == 0, "project_psd_relative: N = M + 2 and even");
     let m = N / 2;
@@ -528,7 +529,8 @@ mod tests {
 
     /// The projection on the complement of the translations equals the projection of the
     /// whole matrix (to 1e-12 of its norm) for a Hessian that vanishes along the translations:
-    /// Q S Qᵀ with S a random symmetric matrix, of both widths the pairs have.
+    /// a random indefinite sum of ±v vᵀ over vectors v with no net translation, of both widths
+    /// the pairs have.
     #[test]
     fn projecting_without_the_translations_is_projecting() {
         fn check<const N: usize, const M: usize>(rand: &mut impl FnMut() -> f64) {
