@@ -105,7 +105,7 @@ pub(super) struct BarrierRun {
     /// Descend on the incremental potential in this step's solves: an indefinite tangent is
     /// made definite by projecting its pair Hessians onto the PSD matrices, else by a shift of
     /// its diagonal ([`Simulation::factor_descent`]); the solve gets
-    /// four times the iterations. On in the retry of a step that failed without, and from then
+    /// [`DESCENT_ITERATIONS`] times the iterations. On in the retry of a step that failed without, and from then
     /// on for the rest of the run: in a rearranging packing nearly every first attempt with
     /// the exact tangent fails once one has (robustness case 12: every one from its fifth step
     /// on, 25 iterations each), and where the tangent is definite the descent's solve is
