@@ -19,7 +19,7 @@ pub struct HistoryWriter {
 
 /// Compaction columns (the contact issue's exact names), present when the model has walls or
 /// several bodies.
-pub const COMPACTION_COLUMNS: [&str; 13] = [
+pub const COMPACTION_COLUMNS: [&str; 21] = [
     "solid_ratio",
     "p_left",
     "p_right",
@@ -33,6 +33,14 @@ pub const COMPACTION_COLUMNS: [&str; 13] = [
     "active_contacts",
     "stabilisation_energy",
     "external_work",
+    "ft_left",
+    "ft_right",
+    "ft_bottom",
+    "ft_top",
+    "travel_left",
+    "travel_right",
+    "travel_bottom",
+    "travel_top",
 ];
 
 /// Whether a model writes the compaction columns.
@@ -165,6 +173,7 @@ pub fn history_values(r: &StepReport) -> Vec<f64> {
         v.push(c.solid_ratio);
         v.extend(c.pressure.iter().chain(&c.force));
         v.extend([c.max_penetration, c.active_contacts as f64, c.stabilisation_energy, c.external_work]);
+        v.extend(c.shear.iter().chain(&c.travel));
     }
     for x in r.reactions.iter().chain(&r.displacements) {
         v.extend(x);
@@ -182,6 +191,10 @@ pub struct FinalState {
     /// Wall pressures and forces (MPa, N/mm) in the order left, right, bottom, top.
     pub pressure: Option<[f64; 4]>,
     pub force: Option<[f64; 4]>,
+    /// Tangential wall forces (N/mm, along y on the left and right walls, x on the bottom and
+    /// top ones) and the walls' inward travel since t = 0 (mm), in the same order.
+    pub shear: Option<[f64; 4]>,
+    pub travel: Option<[f64; 4]>,
     /// |A − A₀|/A₀ over all particles at the end, and the largest per-particle value over the
     /// whole run.
     pub volume_error: f64,
@@ -199,6 +212,8 @@ impl FinalState {
             solid_ratio: c.map(|c| c.solid_ratio).filter(|p| *p > 0.0),
             pressure: c.map(|c| c.pressure),
             force: c.map(|c| c.force),
+            shear: c.map(|c| c.shear),
+            travel: c.map(|c| c.travel),
             volume_error: r.volume_error,
             max_particle_volume_error,
             stabilisation_ratio: c.filter(|c| c.external_work > 0.0).map(|c| c.stabilisation_energy / c.external_work),

@@ -28,7 +28,21 @@ fn coulomb_block(text: String, tol: f64) {
     let model = Model::from_case(&c).unwrap();
     let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
     let mut rows = Vec::new();
-    sim.run(&mut |_, r| rows.push((r.time, r.reactions[0]))).unwrap();
+    let mut wall = Vec::new();
+    sim.run(&mut |_, r| {
+        rows.push((r.time, r.reactions[0]));
+        let c = r.compaction.as_ref().expect("a wall: the compaction columns");
+        wall.push((c.force[2], c.shear[2]));
+    })
+    .unwrap();
+    // the wall's own columns are the block's equilibrium: the top's reaction is the force the
+    // block puts on the wall (normal: f_bottom = −R_y; tangential along x: ft_bottom = R_x), to
+    // 1e-6 of the normal force (the residual tolerance is 1e-8)
+    for (&(t, r), &(f, ft)) in rows.iter().zip(&wall) {
+        let scale = r[1].abs().max(f64::MIN_POSITIVE);
+        assert!((f + r[1]).abs() <= 1e-6 * scale, "t = {t}: f_bottom = {f}, top reaction {r:?}");
+        assert!((ft - r[0]).abs() <= 1e-6 * scale, "t = {t}: ft_bottom = {ft}, top reaction {r:?}");
+    }
     let mu = 0.3;
     // pressing phase: no tangential force
     let (_, r_press) = rows.iter().find(|(t, _)| (*t - 0.5).abs() < 1e-9).copied().unwrap();
@@ -42,6 +56,42 @@ fn coulomb_block(text: String, tol: f64) {
     let ratio = r_end[0].abs() / r_end[1].abs();
     eprintln!("sliding: T/N = {ratio:.9} (μ = {mu})");
     assert!((ratio - mu).abs() < tol * mu, "sliding: T/N = {ratio}");
+}
+
+/// A die in equilibrium with wall friction (issue 22's check, the default barrier contact): 2 × 2
+/// aluminium discs (μ = 0.2 between them and on every wall) pushed by the left wall alone
+/// against the fixed right wall; once the discs spread onto the bottom and top walls, those
+/// walls' friction carries part of the push. The particles are quasi-static and nothing but the
+/// walls acts on them, so every step's wall forces balance: f_left − f_right = ft_bottom +
+/// ft_top and f_bottom − f_top = ft_left + ft_right (`history.csv`'s sign convention: the force
+/// of the particles on the wall along +x on the bottom and top walls, +y on the left and
+/// right ones), to 1e-6 of the largest wall force (the residual tolerance is 1e-8 of the force
+/// scale). The friction must carry at least 5 % of the push at the end, or the test would not
+/// see a missing friction force. The walls' travel is their prescribed motion (10 mm/s on the
+/// left, fixed on the right), to round-off.
+#[test]
+fn die_with_wall_friction_is_in_equilibrium() {
+    let text = std::fs::read_to_string("tests/data/die_wall_friction.toml").unwrap();
+    let c = case::parse(&text, std::path::Path::new("tests/data")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
+    let mut rows = Vec::new();
+    sim.run(&mut |_, r| rows.push((r.time, r.compaction.clone().expect("walls: the compaction columns")))).unwrap();
+    let fmax = rows.iter().flat_map(|(_, c)| c.force).fold(0.0, f64::max);
+    assert!(fmax > 0.0, "the walls carried no load");
+    for (t, c) in &rows {
+        let [fl, fr, fb, ft] = c.force;
+        let [sl, sr, sb, st] = c.shear;
+        assert!((fl - fr - sb - st).abs() <= 1e-6 * fmax, "t = {t}: x: f_left − f_right = {}, ft_bottom + ft_top = {}", fl - fr, sb + st);
+        assert!((fb - ft - sl - sr).abs() <= 1e-6 * fmax, "t = {t}: y: f_bottom − f_top = {}, ft_left + ft_right = {}", fb - ft, sl + sr);
+        assert!((c.travel[0] - 10.0 * t).abs() <= 1e-12 * (1.0 + 10.0 * t), "t = {t}: travel_left = {}", c.travel[0]);
+        assert_eq!(c.travel[1..], [0.0; 3], "t = {t}: the fixed walls' travel");
+    }
+    let (t, last) = rows.last().unwrap();
+    let carried = last.shear[2] + last.shear[3];
+    eprintln!("die at t = {t}: f_left = {:.3}, f_right = {:.3}, friction of the bottom and top walls {carried:.3} N/mm", last.force[0], last.force[1]);
+    assert!(last.solid_ratio >= 0.9 - 1e-9, "the die reached {}", last.solid_ratio);
+    assert!(carried >= 0.05 * last.force[0], "the bottom and top walls' friction carries {carried} of the push {}", last.force[0]);
 }
 
 /// Contact patch test (Taylor & Papadopoulos 1991): two blocks with non-matching meshes (7 and

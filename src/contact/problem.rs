@@ -32,6 +32,10 @@ pub struct ContactStats {
     /// Normal force of the particles on each wall (N/mm, positive in compression), in the order
     /// of the model's walls.
     pub wall_force: Vec<f64>,
+    /// The whole force of the particles on each wall, normal and friction (N/mm, a vector in
+    /// the global axes): the sum of the wall pairs' contributions to the internal force, so that
+    /// −`wall_load`·n (n the wall's normal into the die) is `wall_force`.
+    pub wall_load: Vec<[f64; 2]>,
     /// Largest penetration over all active pairs (mm, ≥ 0).
     pub max_penetration: f64,
     /// Number of active pairs (node-to-segment and node-to-wall).
@@ -457,7 +461,7 @@ impl ContactProblem {
     /// [−λ A ∇∇g, −A ∇g; −A ∇gᵀ, 0] (active) or [0, 0; 0, −A/c] (inactive), the multiplier of
     /// candidate k being the last row of multiplier block k.
     fn add_lagrange(&mut self, x: &[[f64; 2]], walls: &[Wall], f_int: &mut [f64], mut kk: Option<ContactTangent>) -> ContactStats {
-        let mut stats = ContactStats { wall_force: vec![0.0; self.wall_kinds.len()], ..Default::default() };
+        let mut stats = ContactStats { wall_force: vec![0.0; self.wall_kinds.len()], wall_load: vec![[0.0; 2]; self.wall_kinds.len()], ..Default::default() };
         self.trial_nodal.reset(x.len(), self.wall_kinds.len());
         let no_penalty = PenaltyParams { eps_n: 0.0, eps_t: 0.0 };
         let reg = self.spec.lagrange_regularisation;
@@ -588,6 +592,10 @@ impl ContactProblem {
                     self.set.trial_walls[wall][slave] = hist;
                     if carries {
                         stats.wall_force[wall] += lambda * area;
+                        // (the node's contribution −λ A ∇g to the internal force)
+                        for c in 0..2 {
+                            stats.wall_load[wall][c] -= lambda * area * grad[c];
+                        }
                     }
                 }
             }
@@ -693,7 +701,7 @@ impl ContactProblem {
     /// maps. Every process that applies the same evaluations gets the same bits as a serial run.
     /// Lagrange multipliers go through [`ContactProblem::add`].
     pub fn apply(&mut self, evals: &ContactEvals, x: &[[f64; 2]], f_int: &mut [f64], mut tangent: Option<ContactTangent>) -> ContactStats {
-        let mut stats = ContactStats { wall_force: vec![0.0; self.wall_kinds.len()], ..Default::default() };
+        let mut stats = ContactStats { wall_force: vec![0.0; self.wall_kinds.len()], wall_load: vec![[0.0; 2]; self.wall_kinds.len()], ..Default::default() };
         self.trial_nodal.reset(x.len(), self.wall_kinds.len());
         let b = &self.boundary;
         let w = b.pair_width();
@@ -776,6 +784,7 @@ impl ContactProblem {
             self.trial_nodal.pressure[node] = self.trial_nodal.pressure[node].max(r.pressure);
             for c in 0..2 {
                 f_int[2 * node + c] += r.f[c];
+                stats.wall_load[w][c] += r.f[c];
             }
             if let Some(t) = tangent.as_mut() {
                 while next_block.peek().is_some_and(|&&b| evals.wall_blocks[b] < r.key) {

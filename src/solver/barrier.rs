@@ -324,10 +324,15 @@ impl Simulation {
         b.eval.add_gradient(&mut sys.f_int);
         // the lagged friction: its slip since the start of the step
         let eps = FRICTION_EPS * b.h_min;
+        // (a wall pair's friction force on its wall, for the statistics)
+        let mut wall_friction = Vec::new();
         for fp in &b.friction {
             let t = fp.term(u, &self.sol.u, eps);
             for i in 0..fp.width {
                 sys.f_int[fp.dofs[i]] += t.grad[i];
+            }
+            if fp.block.is_none() {
+                wall_friction.push((usize::MAX - fp.id.1, [t.grad[0], t.grad[1]]));
             }
             if tangent {
                 match fp.block {
@@ -375,8 +380,20 @@ impl Simulation {
                 sys.maps.pairs.add(&mut sys.kk.values, i, q.term.hess.as_flattened());
             }
         }
+        // the whole force of the particles on each wall: the wall pairs' barrier and lagged
+        // friction terms in the internal force
+        let mut wall_load = vec![[0.0; 2]; b.eval.wall_force.len()];
+        for w in &b.eval.walls {
+            wall_load[w.wall][0] += w.term.grad[0];
+            wall_load[w.wall][1] += w.term.grad[1];
+        }
+        for (w, f) in wall_friction {
+            wall_load[w][0] += f[0];
+            wall_load[w][1] += f[1];
+        }
         self.contact_stats = ContactStats {
             wall_force: b.eval.wall_force.clone(),
+            wall_load,
             max_penetration: 0.0,
             active: b.eval.edges.len() + b.eval.quads.len() + b.eval.walls.len() + b.contact.ties.len(),
             violation: 0.0,

@@ -49,6 +49,15 @@ pub struct Compaction {
     pub pressure: [f64; 4],
     /// Normal wall force per unit thickness (N/mm): left, right, bottom, top.
     pub force: [f64; 4],
+    /// Tangential (friction) force of the particles on each wall per unit thickness (N/mm),
+    /// along the global axis the wall lies on: y for the left and right walls, x for the bottom
+    /// and top ones (so that a die's equilibrium reads f_left − f_right = shear_bottom +
+    /// shear_top and f_bottom − f_top = shear_left + shear_right). 0 without friction.
+    #[serde(default)]
+    pub shear: [f64; 4],
+    /// Inward travel of each wall from its position at t = 0 (mm).
+    #[serde(default)]
+    pub travel: [f64; 4],
     pub max_penetration: f64,
     pub active_contacts: usize,
     /// Energy dissipated by the stabilisation springs since the start (N·mm/mm).

@@ -5,6 +5,7 @@
 
 use super::{Compaction, NewtonFailure, Phase, RunSummary, Simulation, SolveError, StepReport, Trial};
 use crate::assembly::FIXED;
+use crate::loading::WallSide;
 use crate::material::TimeIncrement;
 use crate::stabilise::{StabilisationKind, Stabilise};
 use std::ops::ControlFlow;
@@ -422,6 +423,11 @@ impl Simulation {
                 let k = wall.side.index();
                 let len = loading.wall_length(w, t, nodes.iter().map(|&n| x[n]));
                 out.force[k] += f;
+                // the load's component along the wall (y on a left or right wall, x on a
+                // bottom or top one)
+                let along = usize::from(matches!(wall.side, WallSide::Left | WallSide::Right));
+                out.shear[k] += self.contact_stats.wall_load.get(w).map_or(0.0, |l| l[along]);
+                out.travel[k] = loading.wall_travel(w, t);
                 out.pressure[k] += if len > 0.0 { f / len } else { 0.0 };
             }
             if let Some(die) = loading.die_area(t) {
