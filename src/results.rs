@@ -16,15 +16,17 @@
 //! - `velocity` (n_nodes × 3, f64, mm/s): the Newmark velocity in a dynamic run, otherwise the
 //!   mean velocity of the step (u_n − u_{n−1})/Δt;
 //! - when the model has contact (walls or several particles), node fields from the last
-//!   converged contact evaluation: `contact_pressure` (n_nodes, MPa, ≥ 0 in compression; the
-//!   node's own pairs, two-pass), `contact_gap` (n_nodes, mm, smallest normal gap to a
+//!   converged contact evaluation: `contact_pressure` and `contact_shear` (n_nodes, MPa: the
+//!   normal and tangential components of the node's contact force over its tributary contact
+//!   length, current configuration, both sides of a pair alike; pressure positive in
+//!   compression, shear positive along the boundary with the particle on its left; see
+//!   `crate::contact::NodalContact::set_tractions`), `contact_gap` (n_nodes, mm, smallest normal gap to a
 //!   candidate segment or wall, negative = penetration, NaN for a node without one),
 //!   `contact_status` (n_nodes, i32: 0 open, 1 sliding, 2 sticking, 3 tied), `contact_force`
 //!   (n_nodes × 3, N/mm: the force the contacts exert on the node) and `wall_force`
 //!   (n_nodes × 4, N/mm: the normal force the node exerts on the left, right, bottom and top
 //!   wall; its column sums are `f_left` … `f_top` of the history). With the barrier contact
-//!   (`crate::solver::Simulation::nodal_contact`): the pressure is the size of the barrier's
-//!   force on the node over its tributary boundary length, the gap the distance the barrier
+//!   (`crate::solver::Simulation::nodal_contact`): the gap is the distance the barrier
 //!   acts on (positive; NaN beyond d̂), the status 0 / 1 / 2 / 3 as above (sticking: a slip
 //!   of the step below ε_v), the force that of the barrier, the friction and the ties;
 //! - when the model has walls: `wall_points` (2 n_walls × 2, f64, mm) and `wall_cells`
@@ -429,7 +431,7 @@ impl ResultsWriter {
                 .create("velocity")?
                 .write_raw(&velocity)?;
             if let Some((c, force, wall_force)) = &contact {
-                for (name, v) in [("contact_pressure", &c.pressure), ("contact_gap", &c.gap)] {
+                for (name, v) in [("contact_pressure", &c.pressure), ("contact_shear", &c.shear), ("contact_gap", &c.gap)] {
                     g.new_dataset::<f64>().shape(n_nodes).create(name)?.write_raw(v)?;
                 }
                 g.new_dataset::<i32>()
@@ -579,7 +581,7 @@ fn particle_grid(h5: &str, g: &str, time: f64, n_nodes: usize, n_cells: usize, c
         );
     }
     if contact {
-        for (name, ty, prec) in [("contact_pressure", "Float", 8), ("contact_gap", "Float", 8), ("contact_status", "Int", 4)] {
+        for (name, ty, prec) in [("contact_pressure", "Float", 8), ("contact_shear", "Float", 8), ("contact_gap", "Float", 8), ("contact_status", "Int", 4)] {
             let _ = writeln!(
                 s,
                 "        <Attribute Name=\"{name}\" AttributeType=\"Scalar\" Center=\"Node\">{}</Attribute>",

@@ -130,6 +130,61 @@ fn contact_patch_test_barrier() {
     contact_patch_test(barrier, "barrier");
 }
 
+/// The `contact_pressure` field on the contact patch test (issue 22's check): on both sides of
+/// the interface, every node's pressure (the normal contact force over its tributary contact
+/// length, current configuration) is uniform — to 1 % with the default barrier contact and to
+/// 1e-3 with Lagrange multipliers, which transmit the uniform stress exactly — and Σ pressure ×
+/// tributary length on each side is the applied load (1 MPa × 10 mm) to 1e-6 (the Newton
+/// residual tolerance is 1e-8). The issue's meshes: non-matching 7/5, 4/5 and 3/5 elements
+/// across, and the finer mesh above as well as below (two-pass and the barrier have no master
+/// side, so swapping the blocks' meshes swaps master and slave). The interface's ends are a
+/// block corner each; their tributary length is the half edge along the interface only.
+#[test]
+fn contact_pressure_field_is_uniform_on_the_patch_test() {
+    let base = std::fs::read_to_string("jobs/verification/contact_patch.toml").unwrap();
+    let meshes = [([7, 3], [5, 3]), ([4, 2], [5, 2]), ([3, 2], [5, 2]), ([5, 2], [4, 2]), ([5, 2], [3, 2])];
+    for (lower, upper) in meshes {
+        let text = base
+            .replace("divisions = [7, 3]", &format!("divisions = [{}, {}]", lower[0], lower[1]))
+            .replace("divisions = [5, 3]", &format!("divisions = [{}, {}]", upper[0], upper[1]))
+            .replace("penetration_tol = 1e-6\n", "");
+        for (method, lift, tol) in [("barrier", 0.02, 0.01), ("lagrange", 0.0, 1e-3)] {
+            let case = text
+                .replace("method = \"augmented_lagrangian\"", &format!("method = \"{method}\""))
+                .replace("origin = [0.0, 5.0]", &format!("origin = [0.0, {}]", 5.0 + lift));
+            assert!(case.contains(&format!("method = \"{method}\"")) && case.contains(&format!("divisions = [{}, {}]", upper[0], upper[1])));
+            let c = case::parse(&case, std::path::Path::new("jobs/verification")).unwrap();
+            let model = Model::from_case(&c).unwrap();
+            let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
+            sim.run(&mut |_, _| {}).unwrap();
+            let x = sim.coords(&sim.sol.u);
+            let nodal = sim.nodal_contact().expect("two bodies: contact");
+            for (b, y0) in [(0, 5.0), (1, 5.0 + lift)] {
+                let body = &sim.model.bodies[b];
+                let range = body.node_offset..body.node_offset + body.mesh.nodes.len();
+                let mut side: Vec<usize> = range.filter(|&n| (sim.model.x0[n][1] - y0).abs() < 1e-9).collect();
+                side.sort_by(|&m, &n| x[m][0].total_cmp(&x[n][0]));
+                let p: Vec<f64> = side.iter().map(|&n| nodal.pressure[n]).collect();
+                let mean = p.iter().sum::<f64>() / p.len() as f64;
+                let spread = p.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max) / mean;
+                // tributary length along the interface: half of each interface edge at the node
+                let mut length = vec![0.0; side.len()];
+                for i in 1..side.len() {
+                    let l = (x[side[i]][0] - x[side[i - 1]][0]).hypot(x[side[i]][1] - x[side[i - 1]][1]);
+                    length[i - 1] += 0.5 * l;
+                    length[i] += 0.5 * l;
+                }
+                let resultant: f64 = p.iter().zip(&length).map(|(p, l)| p * l).sum();
+                let shear = side.iter().map(|&n| nodal.shear[n].abs()).fold(0.0, f64::max);
+                eprintln!("patch {lower:?}/{upper:?} {method}, {} side: {} nodes, pressure {mean:.6} ± {spread:.2e}, resultant {resultant:.9} N/mm, largest |shear| {shear:.1e}", if b == 0 { "lower" } else { "upper" }, side.len());
+                assert!(spread <= tol, "{method} {lower:?}/{upper:?} body {b}: pressures {p:?}");
+                assert!((resultant - 10.0).abs() <= 1e-6 * 10.0, "{method} {lower:?}/{upper:?} body {b}: resultant {resultant}");
+                assert!(shear <= 1e-3 * mean, "{method} {lower:?}/{upper:?} body {b}: frictionless, yet shear {shear}");
+            }
+        }
+    }
+}
+
 fn contact_patch_test(text: String, label: &str) {
     let c = case::parse(&text, std::path::Path::new("jobs/verification")).unwrap();
     let model = Model::from_case(&c).unwrap();

@@ -37,6 +37,10 @@
 //! 1 % except at the two outermost loaded nodes on each side (the second −5 %; the outermost
 //! 1242 MPa against 683 MPa: the edge falls inside its segment).
 //!
+//! The solver's own `contact_pressure` field (what `results.h5` holds,
+//! `NodalContact::set_tractions`) gives the same current-configuration fit on every method
+//! (issue 22's check of the field against Johnson's closed form, the same 5 %).
+//!
 //! Also checked: equilibrium (top and bottom wall forces equal to 1e-7 relative; the Newton
 //! residual tolerance is 1e-8), consistency (Σ nodal pressure × tributary length = the wall
 //! force of the run, 1e-9), the symmetry constraints carry no load, and the penetration is
@@ -319,8 +323,18 @@ fn check_hertz(text: String) {
         last.max_penetration
     );
 
+    // the solver's own `contact_pressure` field (what results.h5 holds) on the same nodes: the
+    // normal force over the tributary contact length, current configuration; it must give the
+    // same Hertz fit within the same tolerance
+    let nodal = sim.nodal_contact().expect("contact");
+    let field = Profile {
+        x: current.x.clone(),
+        force: loaded.iter().zip(&current.length).map(|(&(_, n), l)| nodal.pressure[n] * l).collect(),
+        length: current.length.clone(),
+    };
     let fit_ref = reference.fit(0.2);
     let fit_cur = current.fit(0.2);
+    let fit_field = field.fit(0.2);
     let seconds = start.elapsed().as_secs_f64();
     eprintln!(
         "Hertz disc: {n_elements} elements, {} steps, {} Newton iterations, {seconds:.1} s",
@@ -339,7 +353,7 @@ fn check_hertz(text: String) {
         reference.x.len(),
         a_h / reference.length[reference.length.len() / 2]
     );
-    for (name, fit) in [("reference", &fit_ref), ("current", &fit_cur)] {
+    for (name, fit) in [("reference", &fit_ref), ("current", &fit_cur), ("field", &fit_field)] {
         eprintln!(
             "  {name:9}: a_fe = {:.4} mm ({:+.2} %), p0_fe = {:.1} MPa ({:+.2} %), moment a = {:.4} mm ({:+.2} %), {} nodes fitted",
             fit.a,
@@ -359,7 +373,7 @@ fn check_hertz(text: String) {
         );
     }
 
-    for (name, fit) in [("reference", &fit_ref), ("current", &fit_cur)] {
+    for (name, fit) in [("reference", &fit_ref), ("current", &fit_cur), ("field", &fit_field)] {
         assert!(
             (fit.a / a_h - 1.0).abs() < TOL,
             "{name}: half-width {} vs Hertz {a_h}",

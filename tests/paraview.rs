@@ -28,7 +28,7 @@ cells = set(r.CellData.keys())
 points = set(r.PointData.keys())
 need = {"stress_xx", "stress_yy", "stress_xy", "stress_zz", "von_mises", "pressure",
         "eq_plastic_strain", "eq_creep_strain", "particle_id", "material_id"}
-need_points = {"displacement", "velocity", "contact_force", "contact_pressure", "contact_gap", "contact_status"}
+need_points = {"displacement", "velocity", "contact_force", "contact_pressure", "contact_shear", "contact_gap", "contact_status"}
 if not need <= cells or not need_points <= points:
     sys.exit("pvpython: missing arrays: cells %r, points %r" % (sorted(need - cells), sorted(need_points - points)))
 plo, phi = r.PointData["contact_pressure"].GetRange()

@@ -18,7 +18,7 @@ use super::geometry::{nts_project, Linearised, PairGeometry, SegmentGeometry, Sm
 use super::pairs::{Backup, FrozenPair, PairSet, TOUCH};
 use super::search::ContactSearch;
 use super::smooth::{self, NDOF};
-use super::{ContactMethod, ContactParams};
+use super::{ContactMethod, ContactParams, Segment};
 use crate::linalg::BlockMap;
 use std::collections::HashMap;
 
@@ -51,9 +51,14 @@ pub struct ContactStats {
 /// slave of its own pairs), every node-to-wall pair to its node.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NodalContact {
-    /// Normal contact pressure (MPa, ≥ 0 in compression): the sum over the node's pairs of the
-    /// pair's share (weight) times its pressure, or the wall pressure when that is larger.
+    /// Normal contact pressure (MPa, positive in compression, negative only where a tie pulls):
+    /// the normal component of `force` over the node's tributary contact length, in the current
+    /// configuration, on both sides of a pair alike ([`NodalContact::set_tractions`]).
     pub pressure: Vec<f64>,
+    /// Contact shear stress (MPa): the tangential component of `force` over the same length,
+    /// positive along the boundary's direction (the particle on its left, counter-clockwise).
+    #[serde(default)]
+    pub shear: Vec<f64>,
     /// Smallest normal gap of the node over its pairs and the walls (mm, negative =
     /// penetration); NaN for a node without any candidate.
     pub gap: Vec<f64>,
@@ -75,6 +80,8 @@ impl NodalContact {
         self.gap.resize(n_nodes, f64::NAN);
         self.status.clear();
         self.status.resize(n_nodes, 0);
+        self.shear.clear();
+        self.shear.resize(n_nodes, 0.0);
         self.force.clear();
         self.force.resize(n_nodes, [0.0; 2]);
         self.wall_force.resize(n_walls, Vec::new());
@@ -90,8 +97,8 @@ impl NodalContact {
         }
     }
 
-    /// Record an active pair of `kind` acting on `node` with pressure share `p`.
-    fn active(&mut self, node: usize, p: f64, kind: ContactKind, slip: bool) {
+    /// Record an active pair of `kind` acting on `node`.
+    fn active(&mut self, node: usize, kind: ContactKind, slip: bool) {
         let s = match kind {
             ContactKind::Cohering => 3,
             ContactKind::Sliding => 1,
@@ -99,7 +106,68 @@ impl NodalContact {
             ContactKind::Rubbing { .. } => 2,
         };
         self.status[node] = self.status[node].max(s);
-        self.pressure[node] += p;
+    }
+
+    /// The contact pressure and shear of every node from its contact force (`force`, the
+    /// whole force the contacts put on it, both sides of a pair alike) at coordinates `x`,
+    /// with the boundary `segments` (oriented with their particle on the left): the force's
+    /// normal and tangential components over the node's tributary contact length.
+    ///
+    /// The tributary length is half of each boundary edge at the node that faces the force
+    /// (the force within 30° of the edge's inward normal), so that a node at a particle's
+    /// corner takes only the side in contact (a square block's corner on a flat: half of its
+    /// top edge, not of its side as well); when no edge faces it (a force along a corner's
+    /// bisector), both edges. The normal is that of those edges together (their length-weighted
+    /// mean). So a uniform pressure p on a straight side reads p at every node of it, ends
+    /// included, and Σ pressure × length over a side is the normal force it carries. A node
+    /// that carries a contact force but is not the node of a pair itself (an end of the segment
+    /// of another node's pair) is marked in contact (status 1) if it was open.
+    pub fn set_tractions(&mut self, x: &[[f64; 2]], segments: &[Segment]) {
+        let n = x.len();
+        self.pressure.clear();
+        self.pressure.resize(n, 0.0);
+        self.shear.clear();
+        self.shear.resize(n, 0.0);
+        // per node: the (at most two) boundary edges at it, as vectors along the boundary
+        let mut edges: Vec<[[f64; 2]; 2]> = vec![[[0.0; 2]; 2]; n];
+        let mut count = vec![0u8; n];
+        for s in segments {
+            let [a, b] = s.nodes;
+            let e = [x[b][0] - x[a][0], x[b][1] - x[a][1]];
+            for v in [a, b] {
+                if self.force[v] != [0.0; 2] && count[v] < 2 {
+                    edges[v][count[v] as usize] = e;
+                    count[v] += 1;
+                }
+            }
+        }
+        const FACING: f64 = 0.866_025_403_784_438_6; // cos 30°
+        for v in 0..n {
+            let f = self.force[v];
+            let size = f[0].hypot(f[1]);
+            if size == 0.0 || count[v] == 0 {
+                continue;
+            }
+            if self.status[v] == 0 {
+                self.status[v] = 1;
+            }
+            let all = &edges[v][..count[v] as usize];
+            // an edge e = (Δx, Δy) has the outward normal (Δy, −Δx)/ℓ; the force faces it when
+            // it points along the inward normal: −f·n ≥ cos 30° |f|
+            let faces = |e: &[f64; 2]| -(f[0] * e[1] - f[1] * e[0]) >= FACING * size * e[0].hypot(e[1]);
+            let facing: Vec<[f64; 2]> = all.iter().copied().filter(|e| faces(e)).collect();
+            let used: &[[f64; 2]] = if facing.is_empty() { all } else { &facing };
+            let length: f64 = used.iter().map(|e| 0.5 * e[0].hypot(e[1])).sum();
+            // the sum of the edge vectors is the length-weighted mean direction
+            let d = used.iter().fold([0.0; 2], |s, e| [s[0] + e[0], s[1] + e[1]]);
+            let dl = d[0].hypot(d[1]);
+            if !(length > 0.0) || !(dl > 0.0) {
+                continue;
+            }
+            let (t, nrm) = ([d[0] / dl, d[1] / dl], [d[1] / dl, -d[0] / dl]);
+            self.pressure[v] = -(f[0] * nrm[0] + f[1] * nrm[1]) / length;
+            self.shear[v] = (f[0] * t[0] + f[1] * t[1]) / length;
+        }
     }
 
     /// Add the force −f (f: the contribution to the internal force) on `nodes`.
@@ -557,14 +625,9 @@ impl ContactProblem {
                     let d = dofs[i];
                     self.trial_nodal.force[d / 2][d % 2] += lambda * area * grad[i];
                 }
-                let share = match cand {
-                    Candidate::Pair(q) => lambda * self.set.pairs[q].weight,
-                    Candidate::Wall { .. } => 0.0,
-                };
-                self.trial_nodal.active(slave_node, share, ContactKind::Sliding, true);
+                self.trial_nodal.active(slave_node, ContactKind::Sliding, true);
                 if let Candidate::Wall { wall, .. } = cand {
                     self.trial_nodal.wall_force[wall][slave_node] += lambda * area;
-                    self.trial_nodal.pressure[slave_node] = self.trial_nodal.pressure[slave_node].max(lambda);
                 }
             }
             self.lm.scale[k] = c;
@@ -604,6 +667,7 @@ impl ContactProblem {
                 stats.max_penetration = stats.max_penetration.max(-gap);
             }
         }
+        self.trial_nodal.set_tractions(x, &self.boundary.segments);
         stats
     }
 
@@ -736,7 +800,7 @@ impl ContactProblem {
             stats.active += 1;
             stats.max_penetration = stats.max_penetration.max(-r.gap);
             stats.violation = stats.violation.max(r.violation);
-            self.trial_nodal.active(node, p.weight * r.pressure, kind, r.slip);
+            self.trial_nodal.active(node, kind, r.slip);
             let nodes = b.pair_nodes(node, p.segment);
             let dofs = b.pair_dofs(node, p.segment);
             self.trial_nodal.force(&nodes[..w / 2], &r.f[..w]);
@@ -780,8 +844,7 @@ impl ContactProblem {
             stats.wall_force[w] += r.pressure * b.area[i];
             self.trial_nodal.wall_force[w][node] += r.pressure * b.area[i];
             self.trial_nodal.force(&[node], &r.f);
-            self.trial_nodal.active(node, 0.0, kind, r.slip);
-            self.trial_nodal.pressure[node] = self.trial_nodal.pressure[node].max(r.pressure);
+            self.trial_nodal.active(node, kind, r.slip);
             for c in 0..2 {
                 f_int[2 * node + c] += r.f[c];
                 stats.wall_load[w][c] += r.f[c];
@@ -795,6 +858,7 @@ impl ContactProblem {
                 }
             }
         }
+        self.trial_nodal.set_tractions(x, &self.boundary.segments);
         stats
     }
 
@@ -982,6 +1046,7 @@ impl ContactProblem {
                 continue;
             }
             nodal.pressure[m] = old.nodal.pressure[n];
+            nodal.shear[m] = old.nodal.shear.get(n).copied().unwrap_or(0.0);
             nodal.gap[m] = old.nodal.gap[n];
             nodal.status[m] = old.nodal.status[n];
             nodal.force[m] = old.nodal.force[n];

@@ -522,9 +522,9 @@ impl Simulation {
     /// results files:
     /// - `force`: the force of the barrier, the friction and the ties on the node (N/mm), as
     ///   the node of a pair or an end of its edge;
-    /// - `pressure`: the size of the barrier's force on the node over its tributary boundary
-    ///   length (half of each adjacent boundary edge, current configuration; MPa), so that
-    ///   Σ pressure × length is the normal force the node carries;
+    /// - `pressure`, `shear`: the normal and tangential components of that force over the
+    ///   node's tributary contact length ([`NodalContact::set_tractions`], current
+    ///   configuration), so that Σ pressure × length over a side is the normal force it carries;
     /// - `gap`: the smallest distance the barrier acts on at the node, to an edge of another
     ///   particle or to a wall's barrier plane (which lies the wall offset behind the wall);
     ///   NaN beyond d̂ (mm, never negative);
@@ -537,7 +537,7 @@ impl Simulation {
         let Some(b) = self.barrier.as_ref() else { return NodalContact::default() };
         let x = self.coords(u);
         let walls = b.walls_at(b.alpha);
-        let mut out = NodalContact { pressure: vec![0.0; n_nodes], gap: vec![f64::NAN; n_nodes], status: vec![0; n_nodes], force: vec![[0.0; 2]; n_nodes], wall_force: vec![vec![0.0; n_nodes]; walls.len()] };
+        let mut out = NodalContact { pressure: vec![0.0; n_nodes], shear: vec![0.0; n_nodes], gap: vec![f64::NAN; n_nodes], status: vec![0; n_nodes], force: vec![[0.0; 2]; n_nodes], wall_force: vec![vec![0.0; n_nodes]; walls.len()] };
         let mut normal = vec![[0.0f64; 2]; n_nodes];
         let gap = |g: &mut Vec<f64>, n: usize, d: f64| {
             if !(g[n] <= d) {
@@ -568,20 +568,9 @@ impl Simulation {
             out.wall_force[w.wall][w.node] -= w.term.grad[0] * n[0] + w.term.grad[1] * n[1];
             gap(&mut out.gap, w.node, w.distance);
         }
-        let mut length = vec![0.0; n_nodes];
-        for s in &b.contact.segments {
-            let [a, c] = s.nodes;
-            let l = (x[c][0] - x[a][0]).hypot(x[c][1] - x[a][1]);
-            length[a] += 0.5 * l;
-            length[c] += 0.5 * l;
-        }
         for n in 0..n_nodes {
-            let f = normal[n][0].hypot(normal[n][1]);
-            if f > 0.0 {
+            if normal[n] != [0.0; 2] {
                 out.status[n] = 1;
-                if length[n] > 0.0 {
-                    out.pressure[n] = f / length[n];
-                }
             }
             out.force[n] = normal[n];
         }
@@ -603,6 +592,7 @@ impl Simulation {
             }
             out.status[tie.node] = 3;
         }
+        out.set_tractions(&x, &b.contact.segments);
         out
     }
 
