@@ -68,6 +68,7 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         elements: mesh.elements.clone(),
         elem_material: vec![0; ne],
         elem_body: vec![0; ne],
+        probes: Vec::new(),
         bodies: vec![crate::model::Body { name: "block".into(), contact_h: crate::model::Body::mean_element_size(&mesh), mesh, material: 0, node_offset: 0, elem_offset: 0, mesh_size: 1.0 }],
         reaction_groups: vec![],
         displacement_groups: vec![],

@@ -91,6 +91,53 @@ pub fn shape_derivs(xi: f64, eta: f64) -> [[f64; 2]; 4] {
     d
 }
 
+/// The local coordinates (ξ, η) of point `p` in the quadrilateral with corners `xe` (in the
+/// element's node order): Newton on x(ξ, η) = Σ N_a x_a from the centre, to 1e-13 of the
+/// element's size. `None` when it does not converge (a degenerate element). The point is
+/// inside (or on the boundary) when both |ξ| and |η| are at most 1.
+pub fn local_coordinates(xe: &[[f64; 2]; 4], p: [f64; 2]) -> Option<[f64; 2]> {
+    let size = (0..4).map(|a| (xe[a][0] - xe[(a + 2) % 4][0]).hypot(xe[a][1] - xe[(a + 2) % 4][1])).fold(0.0, f64::max);
+    let mut xi = [0.0f64; 2];
+    for _ in 0..50 {
+        let (n, d) = (shape(xi[0], xi[1]), shape_derivs(xi[0], xi[1]));
+        let (mut r, mut j) = ([p[0], p[1]], [[0.0; 2]; 2]);
+        for a in 0..4 {
+            for c in 0..2 {
+                r[c] -= n[a] * xe[a][c];
+                for k in 0..2 {
+                    j[c][k] += d[a][k] * xe[a][c];
+                }
+            }
+        }
+        if r[0].hypot(r[1]) <= 1e-13 * size {
+            return Some(xi);
+        }
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if !(det.abs() > 0.0) || !det.is_finite() {
+            return None;
+        }
+        xi[0] += (j[1][1] * r[0] - j[0][1] * r[1]) / det;
+        xi[1] += (j[0][0] * r[1] - j[1][0] * r[0]) / det;
+        if !(xi[0].abs() < 1e6 && xi[1].abs() < 1e6) {
+            return None;
+        }
+    }
+    None
+}
+
+/// The value at (ξ, η) of the bilinear field through an element's four Gauss-point values
+/// (in the order of [`GAUSS`]): inside the Gauss points an interpolation, beyond them (up to
+/// the corners) the usual extrapolation.
+pub fn from_gauss_points(values: [f64; 4], xi: [f64; 2]) -> f64 {
+    let n = shape(xi[0] / G, xi[1] / G);
+    (0..4).map(|a| n[a] * values[a]).sum()
+}
+
+/// The corner (ξ, η) of an element's node `a` (0–3, counter-clockwise from (−1, −1)).
+pub fn corner(a: usize) -> [f64; 2] {
+    [XI_A[a], ETA_A[a]]
+}
+
 /// Volumetric treatment of one element.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Volumetric {
@@ -679,6 +726,30 @@ mod tests {
     use crate::material::{Elastic, HardeningTable, J2Plastic, Material};
 
     const XX0: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.1], [1.1, 1.0], [-0.1, 0.9]];
+
+    /// The inverse of the bilinear map: points mapped from known (ξ, η) (inside, on the edges,
+    /// at the corners and outside) come back to them to 1e-12; the Gauss-point field through
+    /// the values of a bilinear function is that function everywhere (interpolation and
+    /// extrapolation to the corners exact to 1e-12).
+    #[test]
+    fn local_coordinates_invert_the_map_and_gauss_values_extrapolate_bilinear_fields() {
+        let map = |xi: [f64; 2]| {
+            let n = shape(xi[0], xi[1]);
+            [(0..4).map(|a| n[a] * XX0[a][0]).sum::<f64>(), (0..4).map(|a| n[a] * XX0[a][1]).sum::<f64>()]
+        };
+        for xi in [[0.0, 0.0], [0.3, -0.7], [1.0, 1.0], [-1.0, 0.25], [0.999, -1.0], [1.5, 0.2], [-1.3, -1.2]] {
+            let back = local_coordinates(&XX0, map(xi)).unwrap();
+            assert!((back[0] - xi[0]).abs() < 1e-12 && (back[1] - xi[1]).abs() < 1e-12, "{xi:?} -> {back:?}");
+        }
+        let f = |xi: [f64; 2]| 2.0 - 0.5 * xi[0] + 3.0 * xi[1] + 0.7 * xi[0] * xi[1];
+        let values = GAUSS.map(f);
+        for xi in [[0.0, 0.0], [0.1, 0.9], [1.0, -1.0], [-1.0, 1.0], [-0.4, -0.2]] {
+            assert!((from_gauss_points(values, xi) - f(xi)).abs() < 1e-12, "{xi:?}");
+        }
+        for a in 0..4 {
+            assert_eq!(corner(a), [XI_A[a], ETA_A[a]]);
+        }
+    }
 
     fn run(kind: Option<Formulation>, law: &Material, uu: &[[f64; 2]; 4], vol: Volumetric, j0: f64, tangent: bool) -> ElementOut {
         let old = [MatState::default(); 4];

@@ -24,6 +24,8 @@ pub enum ModelError {
     RemeshConstrained { body: String, what: &'static str },
     #[error("no body {0}")]
     NoBody(usize),
+    #[error("{key}: {message}")]
+    Probe { key: String, message: String },
 }
 
 /// One meshed body.
@@ -51,6 +53,23 @@ impl Body {
     pub fn mean_element_size(mesh: &Mesh) -> f64 {
         (mesh.area(&mesh.nodes) / mesh.n_elements().max(1) as f64).sqrt()
     }
+}
+
+/// A point whose state goes to `probes.csv` every step (`[output] probes`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Probe {
+    pub name: String,
+    pub at: ProbeAt,
+}
+
+/// Where a probe is, in the global numbering.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProbeAt {
+    /// A material point: the element that holds it in the reference configuration and its
+    /// local coordinates (ξ, η) there.
+    Point { element: usize, xi: [f64; 2] },
+    /// A node, with every element at it and the node's corner (0–3) in each.
+    Node { node: usize, corners: Vec<(usize, usize)> },
 }
 
 /// A named set of nodes whose reactions or mean displacements go to the history.
@@ -101,6 +120,8 @@ pub struct Model {
     pub elem_body: Vec<usize>,
     pub reaction_groups: Vec<NodeGroup>,
     pub displacement_groups: Vec<NodeGroup>,
+    /// The points of `probes.csv`.
+    pub probes: Vec<Probe>,
 }
 
 /// Whether the global tangent is symmetric: every material's consistent tangent is, no load
@@ -203,7 +224,18 @@ impl Model {
         if self.reaction_groups.iter().chain(&self.displacement_groups).any(|g| g.nodes.iter().any(|&n| inside(n))) {
             return Some("output groups");
         }
+        if self.probes.iter().any(|p| match &p.at {
+            ProbeAt::Point { element, .. } => self.elem_body.get(*element) == Some(&b),
+            ProbeAt::Node { node, .. } => inside(*node),
+        }) {
+            return Some("probes");
+        }
         None
+    }
+
+    /// The element that holds reference point `p` (see [`locate`]).
+    pub fn locate(&self, p: [f64; 2], body: Option<usize>) -> Option<(usize, [f64; 2])> {
+        locate(&self.x0, &self.elements, &self.elem_body, p, body)
     }
 
     /// The model with body `b` meshed by `mesh` instead (a re-mesh: `mesh.nodes` are the new
@@ -258,6 +290,23 @@ impl Model {
                 *n = renumber[*n];
             }
         }
+        // (the probes lie in the other bodies: their elements move with their body's offset)
+        let element = |e: usize| {
+            let c = self.elem_body[e];
+            new.bodies[c].elem_offset + (e - self.bodies[c].elem_offset)
+        };
+        let probes = new
+            .probes
+            .iter()
+            .map(|p| Probe {
+                name: p.name.clone(),
+                at: match &p.at {
+                    ProbeAt::Point { element: e, xi } => ProbeAt::Point { element: element(*e), xi: *xi },
+                    ProbeAt::Node { node, corners } => ProbeAt::Node { node: renumber[*node], corners: corners.iter().map(|&(e, a)| (element(e), a)).collect() },
+                },
+            })
+            .collect();
+        new.probes = probes;
         new.x0 = x0;
         new.elements = elements;
         new.elem_material = elem_material;
@@ -273,4 +322,34 @@ impl Model {
         }
         a
     }
+}
+
+/// The element of a mesh (coordinates `x0`, `elements`, their bodies `elem_body`) that holds
+/// point `p` (in body `body` only, when given), and the local coordinates of `p` in it: the
+/// first element in the global order whose closure holds it (to 1e-9 in ξ and η, which are
+/// then clamped to [−1, 1]).
+pub fn locate(x0: &[[f64; 2]], elements: &[[usize; 4]], elem_body: &[usize], p: [f64; 2], body: Option<usize>) -> Option<(usize, [f64; 2])> {
+    const SLACK: f64 = 1e-9;
+    for (e, el) in elements.iter().enumerate() {
+        if body.is_some_and(|b| elem_body[e] != b) {
+            continue;
+        }
+        let xe = el.map(|n| x0[n]);
+        let (lo, hi) = xe.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), q| ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])]));
+        let pad = SLACK * (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        if p[0] < lo[0] - pad || p[0] > hi[0] + pad || p[1] < lo[1] - pad || p[1] > hi[1] + pad {
+            continue;
+        }
+        if let Some(xi) = crate::element::local_coordinates(&xe, p) {
+            if xi[0].abs() <= 1.0 + SLACK && xi[1].abs() <= 1.0 + SLACK {
+                return Some((e, xi.map(|v| v.clamp(-1.0, 1.0))));
+            }
+        }
+    }
+    None
+}
+
+/// Every element at node `n` and the node's corner (0–3) in each.
+pub fn node_corners(elements: &[[usize; 4]], n: usize) -> Vec<(usize, usize)> {
+    elements.iter().enumerate().filter_map(|(e, el)| el.iter().position(|&m| m == n).map(|a| (e, a))).collect()
 }

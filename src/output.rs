@@ -3,19 +3,11 @@
 //! also when the run fails, with the status and the error).
 
 use crate::model::Model;
-use crate::solver::{RunSummary, StepReport};
+use crate::solver::{RunSummary, Simulation, StepReport};
 use serde::Serialize;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-
-/// Writes `history.csv` row by row.
-pub struct HistoryWriter {
-    out: BufWriter<File>,
-    pub path: PathBuf,
-    /// Per column: whether it holds a count (written as an integer).
-    integer: Vec<bool>,
-}
 
 /// Compaction columns (the contact issue's exact names), present when the model has walls or
 /// several bodies.
@@ -83,35 +75,44 @@ pub fn history_columns(model: &Model) -> Vec<String> {
     c
 }
 
-impl HistoryWriter {
-    pub fn create(dir: &Path, model: &Model) -> std::io::Result<Self> {
-        let path = dir.join("history.csv");
+/// A CSV table written row by row, flushed after every row (`history.csv`, `probes.csv`): its
+/// first column is the step, by which a restart keeps the rows written before its checkpoint.
+struct CsvTable {
+    out: BufWriter<File>,
+    path: PathBuf,
+    /// Per column: whether it holds a count (written as an integer).
+    integer: Vec<bool>,
+    /// Whether the other numbers are written in full (the shortest form that reads back to
+    /// the same f64) instead of ten significant digits.
+    exact: bool,
+}
+
+impl CsvTable {
+    fn create(path: PathBuf, header: &str, integer: Vec<bool>, exact: bool) -> std::io::Result<Self> {
         let mut out = BufWriter::new(File::create(&path)?);
-        writeln!(out, "{}", history_columns(model).join(","))?;
+        writeln!(out, "{header}")?;
         out.flush()?;
-        Ok(Self { out, path, integer: integer_columns(model) })
+        Ok(Self { out, path, integer, exact })
     }
 
-    /// Continue `DIR/history.csv` after a restart from step `keep_step`: the rows of steps up
-    /// to `keep_step` stay, later ones (written after the checkpoint) go. A missing file is
-    /// created anew (a warning says the earlier rows are lost); a file with other columns is an
-    /// error.
-    pub fn open_append(dir: &Path, model: &Model, keep_step: usize) -> std::io::Result<Self> {
-        let path = dir.join("history.csv");
-        let header = history_columns(model).join(",");
+    /// Continue `path` after a restart from step `keep_step`: the rows of steps up to
+    /// `keep_step` stay, later ones (written after the checkpoint) go. A missing file is
+    /// created anew (a warning says the earlier rows are lost); a file with another header is
+    /// an error.
+    fn open_append(path: PathBuf, header: &str, integer: Vec<bool>, exact: bool, keep_step: usize) -> std::io::Result<Self> {
         let text = match std::fs::read_to_string(&path) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                tracing::warn!(path = %path.display(), "restart: no history.csv to continue, the rows before the checkpoint are missing");
-                return Self::create(dir, model);
+                tracing::warn!(path = %path.display(), "restart: no file to continue, the rows before the checkpoint are missing");
+                return Self::create(path, header, integer, exact);
             }
             Err(e) => return Err(e),
         };
         let mut lines = text.lines();
-        if lines.next() != Some(header.as_str()) {
+        if lines.next() != Some(header) {
             return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{}: its columns are not those of the case", path.display())));
         }
-        let mut kept = header.clone();
+        let mut kept = header.to_string();
         kept.push('\n');
         for line in lines {
             let step = line.split(',').next().and_then(|v| v.trim().parse::<usize>().ok());
@@ -120,21 +121,24 @@ impl HistoryWriter {
                 kept.push('\n');
             }
         }
-        let tmp = dir.join("history.csv.tmp");
+        let mut tmp = path.clone().into_os_string();
+        tmp.push(".tmp");
+        let tmp = PathBuf::from(tmp);
         std::fs::write(&tmp, kept)?;
         std::fs::rename(&tmp, &path)?;
         let out = BufWriter::new(std::fs::OpenOptions::new().append(true).open(&path)?);
-        Ok(Self { out, path, integer: integer_columns(model) })
+        Ok(Self { out, path, integer, exact })
     }
 
-    pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
-        let values = history_values(r);
+    fn write(&mut self, values: &[f64]) -> std::io::Result<()> {
         for (i, v) in values.iter().enumerate() {
             if i > 0 {
                 write!(self.out, ",")?;
             }
             if self.integer.get(i).copied().unwrap_or(false) {
                 write!(self.out, "{v}")?;
+            } else if self.exact {
+                write!(self.out, "{v:e}")?;
             } else {
                 write!(self.out, "{v:.9e}")?;
             }
@@ -142,6 +146,136 @@ impl HistoryWriter {
         writeln!(self.out)?;
         self.out.flush()
     }
+}
+
+/// Writes `history.csv` row by row.
+pub struct HistoryWriter {
+    table: CsvTable,
+    pub path: PathBuf,
+}
+
+impl HistoryWriter {
+    pub fn create(dir: &Path, model: &Model) -> std::io::Result<Self> {
+        let table = CsvTable::create(dir.join("history.csv"), &history_columns(model).join(","), integer_columns(model), false)?;
+        Ok(Self { path: table.path.clone(), table })
+    }
+
+    /// Continue `DIR/history.csv` after a restart from step `keep_step`: the rows of steps up
+    /// to `keep_step` stay, later ones (written after the checkpoint) go. A missing file is
+    /// created anew (a warning says the earlier rows are lost); a file with other columns is an
+    /// error.
+    pub fn open_append(dir: &Path, model: &Model, keep_step: usize) -> std::io::Result<Self> {
+        let table = CsvTable::open_append(dir.join("history.csv"), &history_columns(model).join(","), integer_columns(model), false, keep_step)?;
+        Ok(Self { path: table.path.clone(), table })
+    }
+
+    pub fn write(&mut self, r: &StepReport) -> std::io::Result<()> {
+        self.table.write(&history_values(r))
+    }
+}
+
+/// What a probe reports, the suffixes of its columns in `probes.csv`: its current position,
+/// displacement, Cauchy stress and equivalent plastic and creep strains.
+pub const PROBE_QUANTITIES: [&str; 10] = ["x", "y", "ux", "uy", "sxx", "syy", "sxy", "szz", "peeq", "ceeq"];
+
+/// The columns of `probes.csv`: `step`, `time`, then `NAME_x` … `NAME_ceeq` per probe.
+pub fn probe_columns(model: &Model) -> Vec<String> {
+    let mut c = vec!["step".to_string(), "time".to_string()];
+    for p in &model.probes {
+        c.extend(PROBE_QUANTITIES.iter().map(|q| format!("{}_{q}", p.name)));
+    }
+    c
+}
+
+/// The probes' values in the state of `sim` (the order of [`PROBE_QUANTITIES`] per probe). A
+/// point probe: the element's bilinear interpolation of the nodal displacement at its local
+/// coordinates, and of the element's Gauss-point stresses and strains (the bilinear field
+/// through the four Gauss points, [`crate::element::from_gauss_points`]). A node probe: the
+/// node's own displacement, and the mean over the elements at the node of their Gauss-point
+/// fields extrapolated to it.
+pub fn probe_values(sim: &Simulation) -> Vec<f64> {
+    use crate::element::{corner, from_gauss_points, shape};
+    use crate::model::ProbeAt;
+    let (model, u, f) = (&sim.model, &sim.sol.u, &sim.sol.fields);
+    // the element's fields at (ξ, η): [sxx, syy, sxy, szz, peeq, ceeq]
+    let fields = |e: usize, xi: [f64; 2]| -> [f64; 6] {
+        let mut out = [0.0; 6];
+        if let Some(sig) = f.sig.get(e) {
+            for c in 0..4 {
+                out[c] = from_gauss_points([sig[0][c], sig[1][c], sig[2][c], sig[3][c]], xi);
+            }
+        }
+        if let Some(st) = f.states.get(e) {
+            out[4] = from_gauss_points(st.map(|q| q.eps_p), xi);
+            out[5] = from_gauss_points(st.map(|q| q.eps_c), xi);
+        }
+        out
+    };
+    let mut v = Vec::with_capacity(PROBE_QUANTITIES.len() * model.probes.len());
+    for p in &model.probes {
+        let (xx, uu, s) = match &p.at {
+            ProbeAt::Point { element, xi } => {
+                let (n, el) = (shape(xi[0], xi[1]), model.elements[*element]);
+                let (mut xx, mut uu) = ([0.0; 2], [0.0; 2]);
+                for a in 0..4 {
+                    for c in 0..2 {
+                        xx[c] += n[a] * model.x0[el[a]][c];
+                        uu[c] += n[a] * u[2 * el[a] + c];
+                    }
+                }
+                (xx, uu, fields(*element, *xi))
+            }
+            ProbeAt::Node { node, corners } => {
+                let mut s = [0.0; 6];
+                for &(e, a) in corners {
+                    let q = fields(e, corner(a));
+                    for c in 0..6 {
+                        s[c] += q[c] / corners.len() as f64;
+                    }
+                }
+                (model.x0[*node], [u[2 * node], u[2 * node + 1]], s)
+            }
+        };
+        v.extend([xx[0] + uu[0], xx[1] + uu[1], uu[0], uu[1]]);
+        v.extend(s);
+    }
+    v
+}
+
+/// Writes `probes.csv` row by row (only for a model with probes), every number in full so that
+/// a node probe's displacement reads back as the bits of `results.h5`.
+pub struct ProbeWriter {
+    table: CsvTable,
+}
+
+impl ProbeWriter {
+    /// `DIR/probes.csv` for the probes of `model`; `None` without probes.
+    pub fn create(dir: &Path, model: &Model) -> std::io::Result<Option<Self>> {
+        if model.probes.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(Self { table: CsvTable::create(dir.join("probes.csv"), &probe_columns(model).join(","), probe_integer(model), true)? }))
+    }
+
+    /// `DIR/probes.csv` continued after a restart from step `keep_step` (as
+    /// [`HistoryWriter::open_append`]); `None` without probes.
+    pub fn open_append(dir: &Path, model: &Model, keep_step: usize) -> std::io::Result<Option<Self>> {
+        if model.probes.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(Self { table: CsvTable::open_append(dir.join("probes.csv"), &probe_columns(model).join(","), probe_integer(model), true, keep_step)? }))
+    }
+
+    /// The row of the converged step `r` of `sim`.
+    pub fn write(&mut self, sim: &Simulation, r: &StepReport) -> std::io::Result<()> {
+        let mut values = vec![r.step as f64, r.time];
+        values.extend(probe_values(sim));
+        self.table.write(&values)
+    }
+}
+
+fn probe_integer(model: &Model) -> Vec<bool> {
+    (0..2 + PROBE_QUANTITIES.len() * model.probes.len()).map(|i| i == 0).collect()
 }
 
 /// The columns of [`history_columns`] that hold counts, by name (positions went stale once

@@ -20,7 +20,7 @@ use crate::case::Case;
 use crate::checkpoint::Checkpoint;
 use crate::fits::CurvePoint;
 use crate::model::Model;
-use crate::output::{write_summary, FinalState, HistoryWriter, Phases, SummaryFile};
+use crate::output::{write_summary, FinalState, HistoryWriter, Phases, ProbeWriter, SummaryFile};
 use crate::comm::Collective;
 use crate::plot::{PlotReport, PlotRequest};
 use crate::results::{ResultsError, ResultsWriter};
@@ -174,6 +174,13 @@ pub enum RunError {
         #[source]
         source: std::io::Error,
     },
+    #[error("cannot {} {}/probes.csv", if *continued { "continue" } else { "write" }, dir.display())]
+    Probes {
+        dir: PathBuf,
+        continued: bool,
+        #[source]
+        source: std::io::Error,
+    },
     #[error("cannot {} the results in {}", if *continued { "continue" } else { "write" }, dir.display())]
     Results {
         dir: PathBuf,
@@ -293,7 +300,7 @@ pub fn progress(time: f64, t_end: f64, solid: Option<(f64, f64, f64)>) -> f64 {
     by_time.max(by_density).clamp(0.0, 1.0)
 }
 
-/// Copy the files a restarted run continues (history.csv, results.h5) from the checkpoint's
+/// Copy the files a restarted run continues (history.csv, probes.csv, results.h5) from the checkpoint's
 /// folder into another output folder (nothing when they are the same folder).
 pub fn copy_run_files(from: &Path, to: &Path) -> Result<(), RunError> {
     let same = match (from.canonicalize(), to.canonicalize()) {
@@ -303,7 +310,7 @@ pub fn copy_run_files(from: &Path, to: &Path) -> Result<(), RunError> {
     if same {
         return Ok(());
     }
-    for name in ["history.csv", "results.h5"] {
+    for name in ["history.csv", "probes.csv", "results.h5"] {
         let (src, dst) = (from.join(name), to.join(name));
         // (never a file onto itself, which would empty it)
         let same_file = matches!((src.canonicalize(), dst.canonicalize()), (Ok(a), Ok(b)) if a == b);
@@ -463,6 +470,13 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             },
         ),
     };
+    // (the history's path, and the probes' beside it, for the closing lines)
+    let history_files = if sim.model.probes.is_empty() { history.path.display().to_string() } else { format!("{}, {}", history.path.display(), out.join("probes.csv").display()) };
+    let mut probes = match &resumed {
+        None => ProbeWriter::create(out, &sim.model),
+        Some((step, ..)) => ProbeWriter::open_append(out, &sim.model, *step),
+    }
+    .map_err(|source| RunError::Probes { dir: out.to_path_buf(), continued: resumed.is_some(), source })?;
     // pictures of an earlier run in the same folder would not match the new results
     crate::plot::remove_old_plots(out);
     let on_ranks = match ranks {
@@ -526,6 +540,9 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         }
         let t_out = Instant::now();
         if let Err(e) = history.write(r) {
+            io_error.get_or_insert(e);
+        }
+        if let Some(Err(e)) = probes.as_mut().map(|p| p.write(s, r)) {
             io_error.get_or_insert(e);
         }
         history_s += t_out.elapsed().as_secs_f64();
@@ -664,14 +681,14 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             let text = match &results {
                 Some(w) => format!(
                     "wrote {}, {}, {} ({} output steps, {:.2} s) and {}",
-                    history.path.display(),
+                    history_files,
                     summary_path.display(),
                     w.h5_path.display(),
                     w.n_written(),
                     w.elapsed_s,
                     w.xdmf_path.display()
                 ),
-                None => format!("wrote {} and {}", history.path.display(), summary_path.display()),
+                None => format!("wrote {} and {}", history_files, summary_path.display()),
             };
             reporter.note(Note::Info, &text);
             RunOutcome::Completed(s)
@@ -681,12 +698,12 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             let text = match &results {
                 Some(w) => format!(
                     "results up to the last converged step are in {}, {}, {} and {}",
-                    history.path.display(),
+                    history_files,
                     summary_path.display(),
                     w.h5_path.display(),
                     w.xdmf_path.display()
                 ),
-                None => format!("results up to the last converged step are in {} and {}", history.path.display(), summary_path.display()),
+                None => format!("results up to the last converged step are in {} and {}", history_files, summary_path.display()),
             };
             reporter.note(Note::Info, &text);
             RunOutcome::Failed(e)

@@ -41,6 +41,32 @@ pub fn front_radius(p: f64, a: f64, b: f64, k: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
+/// Radial displacement of the outer surface at pressure p ≤ p_L (mm), small strain, shear
+/// modulus g = E/3. Incompressibility makes u = B/r in the whole wall; in the elastic zone
+/// σ_θ − σ_r = 4 g B / r² and σ_r(b) = 0, so that the elastic wall has p = 2 g B (1/a² − 1/b²),
+/// and with a plastic front at c the yield condition σ_θ − σ_r = 2k at r = c gives
+/// B = k c² / (2g). Then u_b = B / b.
+pub fn outer_displacement(p: f64, a: f64, b: f64, k: f64, g: f64) -> f64 {
+    let bb = if p <= first_yield_pressure(a, b, k) {
+        p / (2.0 * g * (1.0 / (a * a) - 1.0 / (b * b)))
+    } else {
+        let c = front_radius(p, a, b, k);
+        k * c * c / (2.0 * g)
+    };
+    bb / b
+}
+
+/// The inverse of [`outer_displacement`]: the pressure at which the outer surface has moved
+/// by u_b (MPa; p_L once the front has reached b).
+pub fn pressure_for_outer_displacement(ub: f64, a: f64, b: f64, k: f64, g: f64) -> f64 {
+    let bb = ub * b;
+    if bb <= k * a * a / (2.0 * g) {
+        2.0 * g * bb * (1.0 / (a * a) - 1.0 / (b * b))
+    } else {
+        pressure_for_front((2.0 * g * bb / k).sqrt().min(b), a, b, k)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -53,5 +79,26 @@ mod tests {
         assert!((pressure_for_front(b, a, b, k) - limit_pressure(a, b, k)).abs() < 1e-12 * k);
         let c = front_radius(pressure_for_front(150.0, a, b, k), a, b, k);
         assert!((c - 150.0).abs() < 1e-9);
+    }
+
+    /// u_b is continuous at first yield (the elastic and the elastic–plastic forms meet, 1e-9)
+    /// and grows with p; at the limit the front is at b, so u_b = k b / (2g).
+    #[test]
+    fn outer_displacement_is_continuous_and_reaches_the_limit_form() {
+        let (a, b, k, g) = (100.0, 200.0, 240.0 / 3f64.sqrt(), 70_000.0);
+        let py = first_yield_pressure(a, b, k);
+        let (below, above) = (outer_displacement(py * (1.0 - 1e-12), a, b, k, g), outer_displacement(py * (1.0 + 1e-12), a, b, k, g));
+        assert!((below - above).abs() <= 1e-9 * below, "{below} vs {above}");
+        assert!((below - k * a * a / (2.0 * g * b)).abs() <= 1e-9 * below);
+        let pl = limit_pressure(a, b, k);
+        assert!((outer_displacement(pl, a, b, k, g) - k * b / (2.0 * g)).abs() <= 1e-9 * k * b / g);
+        let mut last = 0.0;
+        for i in 1..=20 {
+            let p = pl * i as f64 / 20.0;
+            let u = outer_displacement(p, a, b, k, g);
+            assert!(u > last);
+            last = u;
+            assert!((pressure_for_outer_displacement(u, a, b, k, g) - p).abs() <= 1e-9 * pl, "inverse at p = {p}");
+        }
     }
 }

@@ -2,10 +2,10 @@
 //! (walls, prescribed displacements, loads, amplitudes) and the parameter structs of each part
 //! of the physics. This is where the case file stops.
 
-use super::{BodySpec, Case, ShapeSpec};
+use super::{BodySpec, Case, ProbeSpecAt, ShapeSpec};
 use crate::loading::{Amplitude, EdgeLoad, Loading, PrescribedDof, WallMotion, WallTravel};
 use crate::mesh::{shapes, Mesh};
-use crate::model::{Body, Model, ModelError, NodeGroup};
+use crate::model::{Body, Model, ModelError, NodeGroup, Probe, ProbeAt};
 
 /// Mesh one body's shape at its mesh size / divisions.
 pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
@@ -133,6 +133,34 @@ impl Model {
         let displacement_groups =
             case.output.displacements.iter().map(|g| group(g, "displacements")).collect::<Result<_, _>>()?;
 
+        // the probes, located in the reference meshes
+        let mut probes = Vec::with_capacity(case.output.probes.len());
+        for (i, p) in case.output.probes.iter().enumerate() {
+            let at = match p.at {
+                ProbeSpecAt::Point { point, body } => {
+                    let (element, xi) = crate::model::locate(&x0, &elements, &elem_body, point, body).ok_or_else(|| ModelError::Probe {
+                        key: format!("output.probes[{i}].point"),
+                        message: format!(
+                            "value [{}, {}]; expected a point inside {} in the reference configuration",
+                            point[0],
+                            point[1],
+                            body.map_or("a particle".to_string(), |b| format!("body \"{}\"", bodies[b].name))
+                        ),
+                    })?;
+                    ProbeAt::Point { element, xi }
+                }
+                ProbeSpecAt::Node { body, node } => {
+                    let n = bodies[body].mesh.n_nodes();
+                    if node >= n {
+                        return Err(ModelError::Probe { key: format!("output.probes[{i}].node"), message: format!("value {node}; expected a node of body \"{}\", 0 to {}", bodies[body].name, n - 1) });
+                    }
+                    let global = bodies[body].node_offset + node;
+                    ProbeAt::Node { node: global, corners: crate::model::node_corners(&elements, global) }
+                }
+            };
+            probes.push(Probe { name: p.name.clone(), at });
+        }
+
         let walls = case
             .walls
             .iter()
@@ -164,6 +192,7 @@ impl Model {
             elem_body,
             reaction_groups,
             displacement_groups,
+            probes,
         })
     }
 }

@@ -328,6 +328,8 @@ pub struct OutputSpec {
     pub reactions: Vec<(usize, String)>,
     /// Mean displacement columns `ux_BODY_SET`, `uy_BODY_SET`.
     pub displacements: Vec<(usize, String)>,
+    /// Named points whose state goes to `probes.csv` every step.
+    pub probes: Vec<ProbeSpec>,
     /// Write the field results every `every` converged steps (and always the last one);
     /// 0 writes no field results. Default 1.
     pub every: usize,
@@ -339,9 +341,27 @@ pub struct OutputSpec {
     pub checkpoint_minutes: f64,
 }
 
+/// An entry of `[output] probes` (validated; located in the mesh by `Model::from_case`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProbeSpec {
+    /// The prefix of its columns in `probes.csv` (letters, digits, `_` and `-`; unique).
+    pub name: String,
+    pub at: ProbeSpecAt,
+}
+
+/// Where a probe is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProbeSpecAt {
+    /// A material point at reference coordinates `point` (mm), inside body `body` when given
+    /// (a point on an interface then belongs to that body), else the first body that holds it.
+    Point { point: [f64; 2], body: Option<usize> },
+    /// Node `node` (the body's own numbering, from 0) of body `body`.
+    Node { body: usize, node: usize },
+}
+
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { reactions: Vec::new(), displacements: Vec::new(), every: 1, checkpoint_every: 0, checkpoint_minutes: 30.0 }
+        Self { reactions: Vec::new(), displacements: Vec::new(), probes: Vec::new(), every: 1, checkpoint_every: 0, checkpoint_minutes: 30.0 }
     }
 }
 

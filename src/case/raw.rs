@@ -360,11 +360,23 @@ pub struct Solver {
     pub repartition_imbalance: Option<f64>,
 }
 
+/// An entry of `[output] probes`: a named point (reference coordinates, optionally within one
+/// body) or a node of a body.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    pub name: Option<String>,
+    pub point: Option<P2>,
+    pub body: Option<String>,
+    pub node: Option<i64>,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
     pub reactions: Option<Vec<String>>,
     pub displacements: Option<Vec<String>>,
+    pub probes: Option<Vec<Probe>>,
     pub every: Option<i64>,
     pub checkpoint_every: Option<i64>,
     pub checkpoint_minutes: Option<f64>,

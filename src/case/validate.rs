@@ -1739,6 +1739,31 @@ impl Cx<'_> {
             r.displacements.unwrap_or_default(),
             bodies,
         )?;
+        let mut names = HashSet::new();
+        for (i, p) in r.probes.unwrap_or_default().into_iter().enumerate() {
+            let key = format!("output.probes[{i}]");
+            let name = self.req(p.name, &format!("{key}.name"), "a name for the probe's columns in probes.csv, e.g. name = \"outer\"")?;
+            if !valid_body_name(&name) {
+                return Err(self.err(&format!("{key}.name"), format!("value \"{name}\"; expected letters, digits, '_' or '-' (it prefixes the probe's columns in probes.csv)")));
+            }
+            if !names.insert(name.clone()) {
+                return Err(self.err(&format!("{key}.name"), format!("value \"{name}\": a probe of that name is already defined; expected a name used once")));
+            }
+            let body = match &p.body {
+                Some(b) => Some(self.find_body(&format!("{key}.body"), b, bodies)?),
+                None => None,
+            };
+            let at = match (p.point, p.node) {
+                (Some(point), None) => ProbeSpecAt::Point { point: self.finite2(&format!("{key}.point"), point.0, "a finite coordinate (mm)")?, body },
+                (None, Some(node)) => {
+                    let body = self.req(body, &format!("{key}.body"), "the body whose node it is, e.g. body = \"block\"")?;
+                    ProbeSpecAt::Node { body, node: self.count(&format!("{key}.node"), node, 0)? }
+                }
+                (Some(_), Some(_)) => return Err(self.err(&format!("{key}.node"), "given with `point`; expected either point = [x, y] or body and node, not both")),
+                (None, None) => return Err(self.missing(&format!("{key}.point"), "point = [x, y] (reference coordinates, mm), or body = \"...\" and node = N")),
+            };
+            out.probes.push(ProbeSpec { name, at });
+        }
         if let Some(v) = r.every {
             out.every = self.count("output.every", v, 0)?;
         }
