@@ -152,6 +152,19 @@ pub fn shape_table(shape: &ShapeSpec) -> toml::Table {
             t.insert("semi_axes".into(), pair(*semi_axes));
             t.insert("angle".into(), (*angle_deg).into());
         }
+        ShapeSpec::EllipsePart { center, semi_axes, angle_deg, part, disc } => {
+            t.insert("center".into(), pair(*center));
+            if *disc {
+                t.insert("radius".into(), semi_axes[0].into());
+            } else {
+                t.insert("semi_axes".into(), pair(*semi_axes));
+            }
+            t.insert("angle".into(), (*angle_deg).into());
+            t.insert("part".into(), match part {
+                crate::mesh::shapes::EllipsePart::Half => "half",
+                crate::mesh::shapes::EllipsePart::Quarter => "quarter",
+            }.into());
+        }
         ShapeSpec::Polygon { vertices } => {
             t.insert("vertices".into(), toml::Value::Array(vertices.iter().map(|v| pair(*v)).collect()));
         }

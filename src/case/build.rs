@@ -18,6 +18,7 @@ pub fn mesh_body(b: &BodySpec) -> Result<Mesh, String> {
         ShapeSpec::Cook => shapes::cook_membrane(div(0, 48.0), div(1, 44.0)),
         ShapeSpec::Disc { center, radius } => shapes::disc(*center, *radius, h),
         ShapeSpec::Ellipse { center, semi_axes, angle_deg } => shapes::ellipse(*center, *semi_axes, *angle_deg, h),
+        ShapeSpec::EllipsePart { center, semi_axes, angle_deg, part, .. } => shapes::ellipse_part(*center, *semi_axes, *angle_deg, *part, h),
         ShapeSpec::Polygon { vertices } => shapes::convex_polygon(vertices, h).map_err(|e| e.to_string())?,
         ShapeSpec::Outline { vertices } => crate::mesh::polygon::simple_polygon(vertices, h).map_err(|e| e.to_string())?,
         ShapeSpec::Gmsh { mesh, .. } => (**mesh).clone(),

@@ -190,6 +190,15 @@ pub enum ShapeSpec {
         semi_axes: [f64; 2],
         angle_deg: f64,
     },
+    /// A half or a quarter of a disc (`disc`, equal semi-axes) or an ellipse, for symmetry
+    /// models ([`crate::mesh::shapes::ellipse_part`]).
+    EllipsePart {
+        center: [f64; 2],
+        semi_axes: [f64; 2],
+        angle_deg: f64,
+        part: crate::mesh::shapes::EllipsePart,
+        disc: bool,
+    },
     Polygon {
         vertices: Vec<[f64; 2]>,
     },
@@ -226,6 +235,8 @@ impl ShapeSpec {
             ShapeSpec::Rectangle { .. } => "rectangle",
             ShapeSpec::Disc { .. } => "disc",
             ShapeSpec::Ellipse { .. } => "ellipse",
+            ShapeSpec::EllipsePart { disc: true, .. } => "disc",
+            ShapeSpec::EllipsePart { disc: false, .. } => "ellipse",
             ShapeSpec::Polygon { .. } => "polygon",
             ShapeSpec::Cook => "cook",
             ShapeSpec::AnnulusSector { .. } => "annulus_sector",
@@ -241,6 +252,8 @@ impl ShapeSpec {
                 &["left", "right", "bottom", "top", "boundary"]
             }
             ShapeSpec::Disc { .. } | ShapeSpec::Ellipse { .. } => &["outer", "boundary"],
+            ShapeSpec::EllipsePart { part: crate::mesh::shapes::EllipsePart::Half, .. } => &["outer", "axis_x", "boundary"],
+            ShapeSpec::EllipsePart { part: crate::mesh::shapes::EllipsePart::Quarter, .. } => &["outer", "axis_x", "axis_y", "boundary"],
             ShapeSpec::Outline { .. } | ShapeSpec::Gmsh { .. } => &["boundary"],
             ShapeSpec::AnnulusSector { .. } => &["inner", "outer", "start", "end", "boundary"],
             ShapeSpec::Polygon { vertices } => {
@@ -261,6 +274,25 @@ impl ShapeSpec {
             ShapeSpec::Disc { center, radius } => Convex::Disc { center: *center, radius: *radius },
             ShapeSpec::Ellipse { center, semi_axes, angle_deg } => Convex::Ellipse { center: *center, semi_axes: *semi_axes, angle_deg: *angle_deg },
             ShapeSpec::Polygon { vertices } => Convex::Polygon(vertices.clone()),
+            ShapeSpec::EllipsePart { center, semi_axes, angle_deg, part, .. } => {
+                // the part's outline: its centre and 64 points along its arc
+                let (t0, span) = match part {
+                    crate::mesh::shapes::EllipsePart::Half => (0.0, std::f64::consts::PI),
+                    crate::mesh::shapes::EllipsePart::Quarter => (0.0, std::f64::consts::FRAC_PI_2),
+                };
+                let (cs, sn) = (angle_deg.to_radians().cos(), angle_deg.to_radians().sin());
+                let mut v: Vec<[f64; 2]> = (0..=64)
+                    .map(|i| {
+                        let t = t0 + span * i as f64 / 64.0;
+                        let (x, y) = (semi_axes[0] * t.cos(), semi_axes[1] * t.sin());
+                        [center[0] + cs * x - sn * y, center[1] + sn * x + cs * y]
+                    })
+                    .collect();
+                if *part == crate::mesh::shapes::EllipsePart::Quarter {
+                    v.push(*center);
+                }
+                Convex::Polygon(v)
+            }
             ShapeSpec::Rectangle { origin: o, size: s } => Convex::Polygon(vec![*o, [o[0] + s[0], o[1]], [o[0] + s[0], o[1] + s[1]], [o[0], o[1] + s[1]]]),
             ShapeSpec::Cook => Convex::Polygon(vec![[0.0, 0.0], [48.0, 44.0], [48.0, 60.0], [0.0, 44.0]]),
             ShapeSpec::AnnulusSector { .. } | ShapeSpec::Outline { .. } | ShapeSpec::Gmsh { .. } => return None,
@@ -291,6 +323,7 @@ impl ShapeSpec {
         match self {
             ShapeSpec::Disc { center, .. }
             | ShapeSpec::Ellipse { center, .. }
+            | ShapeSpec::EllipsePart { center, .. }
             | ShapeSpec::AnnulusSector { center, .. } => Some(*center),
             _ => None,
         }

@@ -914,8 +914,8 @@ impl Cx<'_> {
         )?;
         let allowed: &[&str] = match kind {
             "rectangle" => &["origin", "size"],
-            "disc" => &["center", "radius"],
-            "ellipse" => &["center", "semi_axes", "angle"],
+            "disc" => &["center", "radius", "part", "angle"],
+            "ellipse" => &["center", "semi_axes", "angle", "part"],
             "polygon" | "outline" => &["vertices"],
             "gmsh" => &["file", "group", "scale", "offset"],
             "cook" => &[],
@@ -928,6 +928,7 @@ impl Cx<'_> {
             ("radius", s.radius.is_some()),
             ("semi_axes", s.semi_axes.is_some()),
             ("angle", s.angle.is_some()),
+            ("part", s.part.is_some()),
             ("vertices", s.vertices.is_some()),
             ("inner_radius", s.inner_radius.is_some()),
             ("outer_radius", s.outer_radius.is_some()),
@@ -982,7 +983,14 @@ impl Cx<'_> {
                 let rkey = format!("{key}.radius");
                 let r = self.req(s.radius, &rkey, "a radius > 0 (mm)")?;
                 let radius = self.positive(&rkey, r, "a radius (mm)")?;
-                ShapeSpec::Disc { center, radius }
+                match self.shape_part(key, s.part.as_deref())? {
+                    None if s.angle.is_some() => return Err(self.err(&format!("{key}.angle"), "given for a whole disc; expected it only with part = \"half\" or \"quarter\" (it turns the part)")),
+                    None => ShapeSpec::Disc { center, radius },
+                    Some(part) => {
+                        let angle_deg = self.finite(&format!("{key}.angle"), s.angle.unwrap_or(0.0), "a finite angle (degrees)")?;
+                        ShapeSpec::EllipsePart { center, semi_axes: [radius, radius], angle_deg, part, disc: true }
+                    }
+                }
             }
             "ellipse" => {
                 let center = center(self)?;
@@ -1000,10 +1008,9 @@ impl Cx<'_> {
                     s.angle.unwrap_or(0.0),
                     "a finite angle (degrees)",
                 )?;
-                ShapeSpec::Ellipse {
-                    center,
-                    semi_axes,
-                    angle_deg,
+                match self.shape_part(key, s.part.as_deref())? {
+                    None => ShapeSpec::Ellipse { center, semi_axes, angle_deg },
+                    Some(part) => ShapeSpec::EllipsePart { center, semi_axes, angle_deg, part, disc: false },
                 }
             }
             "polygon" => {
@@ -1124,6 +1131,16 @@ impl Cx<'_> {
         )?;
         self.check_set(&skey, &bodies[bi], &set)?;
         Ok((bi, set))
+    }
+
+    /// `part` of a disc or an ellipse: `None` for the whole shape.
+    fn shape_part(&self, key: &str, part: Option<&str>) -> Result<Option<crate::mesh::shapes::EllipsePart>, CaseError> {
+        use crate::mesh::shapes::EllipsePart;
+        Ok(match part.map(|p| self.choice(&format!("{key}.part"), p, &["full", "half", "quarter"])).transpose()? {
+            None | Some("full") => None,
+            Some("half") => Some(EllipsePart::Half),
+            _ => Some(EllipsePart::Quarter),
+        })
     }
 
     fn find_body(&self, key: &str, name: &str, bodies: &[BodySpec]) -> Result<usize, CaseError> {

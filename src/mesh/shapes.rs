@@ -467,7 +467,7 @@ fn corner_parameter(a: f64, b: f64) -> f64 {
 /// O-grid of the ellipse with semi-axes `a` (along the rotated x axis) and `b`, rotated by
 /// `angle` (radians) about `center`: a core block plus four curved blocks, built in the unit
 /// disc and mapped by `(x, y) ↦ center + R(angle)·(a x, b y)`.
-fn ogrid(center: P, a: f64, b: f64, angle: f64, h: f64) -> Mesh {
+fn ogrid(center: P, a: f64, b: f64, angle: f64, h: f64, even: bool) -> Mesh {
     let (cs, sn) = (angle.cos(), angle.sin());
     let map = |p: P| -> P {
         let (x, y) = (a * p[0], b * p[1]);
@@ -479,8 +479,10 @@ fn ogrid(center: P, a: f64, b: f64, angle: f64, h: f64) -> Mesh {
     let ts = corner_parameter(a, b);
     let (ct, st) = (ts.cos(), ts.sin());
     // Circumferential divisions of the right/left arcs (nr) and the top/bottom arcs (nt).
-    let nr = divisions_for(ellipse_arc_length(a, b, -ts, ts), h).max(2);
-    let nt = divisions_for(ellipse_arc_length(a, b, ts, PI - ts), h).max(2);
+    // (even counts put grid lines on both axes: the mesh then splits into halves and quarters)
+    let round = |n: usize| if even { n + n % 2 } else { n };
+    let nr = round(divisions_for(ellipse_arc_length(a, b, -ts, ts), h).max(2));
+    let nt = round(divisions_for(ellipse_arc_length(a, b, ts, PI - ts), h).max(2));
     // Core: a rectangle whose corner sits inside the boundary corner P(t*), offset along the
     // boundary normal there (45° in physical space for the default t*), by g (for a circle of
     // radius r: g = (1 - c√2) r, core corners at (±c r, ±c r)). Its sides are bulged outward by
@@ -622,7 +624,7 @@ pub fn disc(center: [f64; 2], radius: f64, h: f64) -> Mesh {
         "disc: radius must be positive"
     );
     assert!(h > 0.0 && h.is_finite(), "disc: h must be positive");
-    ogrid(center, radius, radius, 0.0, h)
+    ogrid(center, radius, radius, 0.0, h, false)
 }
 
 /// O-grid mesh of the ellipse with semi-axes `semi_axes = [a, b]` (`a` along the x axis before
@@ -645,7 +647,83 @@ pub fn ellipse(center: [f64; 2], semi_axes: [f64; 2], angle_deg: f64, h: f64) ->
     );
     assert!(h > 0.0 && h.is_finite(), "ellipse: h must be positive");
     assert!(angle_deg.is_finite(), "ellipse: angle must be finite");
-    ogrid(center, a, b, angle_deg.to_radians(), h)
+    ogrid(center, a, b, angle_deg.to_radians(), h, false)
+}
+
+/// A half or a quarter of an ellipse (or disc), for symmetry models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EllipsePart {
+    /// y′ ≥ 0 in the shape's own axes (x′ along its first semi-axis).
+    Half,
+    /// x′ ≥ 0 and y′ ≥ 0.
+    Quarter,
+}
+
+/// The half or quarter (`part`, in the shape's own axes before the rotation by `angle_deg`) of
+/// the O-grid mesh of an ellipse (a disc with equal semi-axes): the full mesh with an even
+/// number of divisions on each arc, whose grid lines then run along both axes, cut along them.
+/// Its nodes on the cuts lie exactly on the axes. Edge sets `"outer"` (the arc), `"axis_x"`
+/// (the flat side on the shape's own x axis), `"axis_y"` (a quarter's flat side on its own y
+/// axis) and `"boundary"`; the cuts are where a symmetry condition or a mirror wall goes.
+///
+/// # Panics
+/// As [`ellipse`].
+pub fn ellipse_part(center: [f64; 2], semi_axes: [f64; 2], angle_deg: f64, part: EllipsePart, h: f64) -> Mesh {
+    let [a, b] = semi_axes;
+    assert!(a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite(), "ellipse_part: semi-axes must be positive");
+    assert!(h > 0.0 && h.is_finite(), "ellipse_part: h must be positive");
+    assert!(angle_deg.is_finite(), "ellipse_part: angle must be finite");
+    let t = angle_deg.to_radians();
+    let full = ogrid(center, a, b, t, h, true);
+    let (cs, sn) = (t.cos(), t.sin());
+    // own axes: x′ = R(−θ)(x − c)
+    let own = |p: P| -> P {
+        let (dx, dy) = (p[0] - center[0], p[1] - center[1]);
+        [cs * dx + sn * dy, -sn * dx + cs * dy]
+    };
+    let world = |q: P| -> P { [center[0] + cs * q[0] - sn * q[1], center[1] + sn * q[0] + cs * q[1]] };
+    let tol = 1e-9 * a.max(b);
+    let keep = |q: P| q[1] > 0.0 && (part == EllipsePart::Half || q[0] > 0.0);
+    let mut map = vec![usize::MAX; full.nodes.len()];
+    let (mut nodes, mut elements) = (Vec::new(), Vec::new());
+    for el in &full.elements {
+        let c = el.iter().fold([0.0; 2], |s, &n| [s[0] + 0.25 * full.nodes[n][0], s[1] + 0.25 * full.nodes[n][1]]);
+        if !keep(own(c)) {
+            continue;
+        }
+        elements.push(el.map(|n| {
+            if map[n] == usize::MAX {
+                map[n] = nodes.len();
+                // a node on a cut goes exactly onto it
+                let mut q = own(full.nodes[n]);
+                for v in &mut q {
+                    if v.abs() <= tol {
+                        *v = 0.0;
+                    }
+                }
+                nodes.push(if q[0] == 0.0 || q[1] == 0.0 { world(q) } else { full.nodes[n] });
+            }
+            map[n]
+        }));
+    }
+    let mut mesh = Mesh::from_quads(nodes, elements);
+    let on = |n: usize, k: usize| own(mesh.nodes[n])[k].abs() <= tol;
+    let (mut outer, mut axis_x, mut axis_y) = (Vec::new(), Vec::new(), Vec::new());
+    for &[p, q] in &mesh.boundary {
+        if on(p, 1) && on(q, 1) {
+            axis_x.push([p, q]);
+        } else if part == EllipsePart::Quarter && on(p, 0) && on(q, 0) {
+            axis_y.push([p, q]);
+        } else {
+            outer.push([p, q]);
+        }
+    }
+    mesh.edge_sets.insert("outer".into(), outer);
+    mesh.edge_sets.insert("axis_x".into(), axis_x);
+    if part == EllipsePart::Quarter {
+        mesh.edge_sets.insert("axis_y".into(), axis_y);
+    }
+    mesh
 }
 
 // ---------------------------------------------------------------------------------------------
