@@ -16,9 +16,25 @@ pub fn mpfem() -> Command {
 }
 
 /// An empty scratch folder `mpfem-<test crate>-<process id>-<name>` in the system's temporary
-/// folder (emptied when it exists).
+/// folder (emptied when it exists). It stays after the test, to be looked at when the test
+/// failed; the folders of the same test left by earlier runs (another process id that is no
+/// longer running) are removed here, so that repeated runs (CI on one machine) do not fill
+/// the temporary folder.
 pub fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mpfem-{}-{}-{name}", env!("CARGO_CRATE_NAME"), std::process::id()));
+    let tmp = std::env::temp_dir();
+    let prefix = format!("mpfem-{}-", env!("CARGO_CRATE_NAME"));
+    let suffix = format!("-{name}");
+    if let Ok(entries) = std::fs::read_dir(&tmp) {
+        for e in entries.flatten() {
+            let file = e.file_name();
+            let Some(f) = file.to_str() else { continue };
+            let Some(pid) = f.strip_prefix(&prefix).and_then(|r| r.strip_suffix(&suffix)).and_then(|p| p.parse::<u32>().ok()) else { continue };
+            if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+    let d = tmp.join(format!("{prefix}{}{suffix}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
