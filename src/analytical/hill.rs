@@ -91,7 +91,9 @@ mod tests {
         assert!((below - above).abs() <= 1e-9 * below, "{below} vs {above}");
         assert!((below - k * a * a / (2.0 * g * b)).abs() <= 1e-9 * below);
         let pl = limit_pressure(a, b, k);
-        assert!((outer_displacement(pl, a, b, k, g) - k * b / (2.0 * g)).abs() <= 1e-9 * k * b / g);
+        // (p(c) is flat at c = b, dp/dc = 2k (1/c − c/b²) = 0: the front there is found to the
+        // square root of the rounding, 1e-8 relative)
+        assert!((outer_displacement(pl, a, b, k, g) - k * b / (2.0 * g)).abs() <= 1e-6 * k * b / g);
         let mut last = 0.0;
         for i in 1..=20 {
             let p = pl * i as f64 / 20.0;
