@@ -64,6 +64,10 @@ pub enum Formulation {
     /// Updated Lagrangian (current configuration), paper eq. 12–17.
     #[default]
     UpdatedLagrangian,
+    /// Linear (small-strain) kinematics, for verification against linear references
+    /// (`[model] kinematics = "linear"`, [`evaluate_linear`]): strains ε = sym ∇₀u, equilibrium
+    /// on the reference configuration, no geometric stiffness.
+    Linear,
 }
 
 /// Gauss points of the 2×2 rule (ξ, η); all weights are 1.
@@ -427,6 +431,9 @@ pub struct ElementInput<'a> {
 /// Errors when an element is inverted at a Gauss point or a local return map fails, and
 /// [`MaterialError::InvalidVolumeRatio`] when `j0` is not positive and finite.
 pub fn evaluate(formulation: Formulation, input: ElementInput<'_>, out: &mut ElementOut) -> Result<(), MaterialError> {
+    if formulation == Formulation::Linear {
+        return evaluate_linear(input, out);
+    }
     let ElementInput { law, xx0, uu, old, inc, vol, j0, tangent } = input;
     check_j0(j0)?;
     let inv_j0 = 1.0 / j0;
@@ -476,7 +483,7 @@ pub fn evaluate(formulation: Formulation, input: ElementInput<'_>, out: &mut Ele
                     add_geometric(&mut out.kk, &dn_dx0, &[[s[0], s[2]], [s[2], s[1]]], w0);
                 }
             }
-            Formulation::UpdatedLagrangian => {
+            Formulation::UpdatedLagrangian | Formulation::Linear => {
                 // ∂N_a/∂x = ∂N_a/∂X F⁻¹
                 let mut dn_dx = [[0.0; 2]; 4];
                 for a in 0..4 {
@@ -503,6 +510,90 @@ pub fn evaluate(formulation: Formulation, input: ElementInput<'_>, out: &mut Ele
                     add_geometric(&mut out.kk, &dn_dx, &[[sig[0], sig[2]], [sig[2], sig[1]]], dv);
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// The exponential of the symmetric 2×2 strain `[[a, b], [b, d]]`: e^m (cosh r I + sinh r / r
+/// (A − m I)) with m = (a + d)/2 and r = √(((a − d)/2)² + b²).
+fn exp_sym2(a: f64, b: f64, d: f64) -> [[f64; 2]; 2] {
+    let (m, h) = (0.5 * (a + d), 0.5 * (a - d));
+    let r = h.hypot(b);
+    // sinh r / r, by its series below 1e-4 (no 0/0)
+    let s = if r < 1e-4 { 1.0 + r * r / 6.0 } else { r.sinh() / r };
+    let (c, e) = (r.cosh(), m.exp());
+    [[e * (c + s * h), e * s * b], [e * s * b, e * (c - s * h)]]
+}
+
+/// One Q1/P0 element with linear (small-strain) kinematics ([`Formulation::Linear`]), for
+/// verification against linear references at any load:
+/// - strain ε = sym ∇₀u at each Gauss point; the law is given the stretch F = exp ε (no
+///   rotation), whose logarithmic strain is ε exactly, so that the Hencky law is linear
+///   elasticity, τ′ = 2G dev ε, and the J2 and creep updates on the logarithmic elastic strain
+///   are the small-strain return maps up to terms of the order of the strains times the
+///   plastic strains (the exponential map on a non-coaxial C_p⁻¹);
+/// - stress σ = τ′ + p I, internal force ∫ B₀ᵀ σ dV₀ on the reference configuration and the
+///   tangent ∫ B₀ᵀ c B₀ dV₀ (the law's tangent, the small-strain one up to terms of the order of
+///   the strains), without geometric stiffness;
+/// - mean dilatation linearised: e_v = g₀·u / V (g₀ = ∂V/∂X), p = λ_e + κ e_v, f = p g₀,
+///   K = κ g₀ g₀ᵀ / V; Θ = 1 + e_v for the incompressibility updates.
+///
+/// The element's reference configuration must be the original one (j₀ = 1: no re-meshing).
+pub fn evaluate_linear(input: ElementInput<'_>, out: &mut ElementOut) -> Result<(), MaterialError> {
+    let ElementInput { law, xx0, uu, old, inc, vol, j0, tangent } = input;
+    if j0 != 1.0 {
+        return Err(MaterialError::InvalidVolumeRatio(j0));
+    }
+    out.f_int = [0.0; 8];
+    if tangent {
+        out.kk = [[0.0; 8]; 8];
+    }
+    let xc: [[f64; 2]; 4] = std::array::from_fn(|a| [xx0[a][0] - xx0[0][0], xx0[a][1] - xx0[0][1]]);
+    let (area0, g0) = quad_area_grad(&xc);
+    if area0 <= 0.0 {
+        return Err(MaterialError::InvertedElement(area0));
+    }
+    let ev = (0..4).map(|a| g0[2 * a] * uu[a][0] + g0[2 * a + 1] * uu[a][1]).sum::<f64>() / area0;
+    let p = vol.lambda + vol.kappa * ev;
+    for i in 0..8 {
+        out.f_int[i] += p * g0[i];
+    }
+    if tangent {
+        for i in 0..8 {
+            for j in 0..8 {
+                out.kk[i][j] += vol.kappa * g0[i] * g0[j] / area0;
+            }
+        }
+    }
+    out.pressure = p;
+    out.theta = 1.0 + ev;
+    for (q, gp) in GAUSS.iter().enumerate() {
+        let (det_j0, dn_dx0) = reference_gradients(xx0, gp[0], gp[1])?;
+        let mut grad = [[0.0; 2]; 2];
+        for a in 0..4 {
+            for i in 0..2 {
+                for k in 0..2 {
+                    grad[i][k] += uu[a][i] * dn_dx0[a][k];
+                }
+            }
+        }
+        let f2 = exp_sym2(grad[0][0], 0.5 * (grad[0][1] + grad[1][0]), grad[1][1]);
+        let (_, _, MatResponse { tau, cc, state }) = law_response(law, &f2, &old[q], inc, 1.0)?;
+        out.gauss[q] = GaussOut { sig: cauchy(&tau, 1.0, p), state };
+        let mut bl = [[0.0; 8]; 3];
+        for a in 0..4 {
+            let (n1, n2) = (dn_dx0[a][0], dn_dx0[a][1]);
+            bl[0][2 * a] = n1;
+            bl[1][2 * a + 1] = n2;
+            bl[2][2 * a] = n2;
+            bl[2][2 * a + 1] = n1;
+        }
+        for i in 0..8 {
+            out.f_int[i] += det_j0 * (bl[0][i] * tau[0] + bl[1][i] * tau[1] + bl[2][i] * tau[2]);
+        }
+        if tangent {
+            add_bt_d_b(&mut out.kk, &bl, &cc, det_j0);
         }
     }
     Ok(())

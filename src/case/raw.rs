@@ -233,6 +233,7 @@ impl Body {
 pub struct Model {
     pub formulation: Option<String>,
     pub element: Option<String>,
+    pub kinematics: Option<String>,
 }
 
 #[derive(Deserialize)]

@@ -251,7 +251,20 @@ impl Cx<'_> {
                 }
             },
         };
+        let kinematics = r.model.as_ref().and_then(|m| m.kinematics.clone());
+        let linear = match kinematics.as_deref() {
+            None | Some("finite") => false,
+            Some("linear") => true,
+            Some(k) => return Err(self.err("model.kinematics", format!("value \"{k}\"; expected \"finite\" (large deformation, the default) or \"linear\" (small strain, for verification)"))),
+        };
+        if linear && element == crate::element::ElementKind::Q1P0Enhanced {
+            return Err(self.err("model.element", "value \"q1p0_enhanced\" with kinematics = \"linear\": the enhanced element has no small-strain form yet; expected \"q1p0\""));
+        }
+        if linear && r.model.as_ref().is_some_and(|m| m.formulation.is_some()) {
+            return Err(self.err("model.formulation", "given with kinematics = \"linear\", where total and updated Lagrangian are the same (the reference configuration); expected no formulation"));
+        }
         let formulation = match r.model.and_then(|m| m.formulation) {
+            None if linear => Formulation::Linear,
             None => Formulation::UpdatedLagrangian,
             Some(f) => match f.as_str() {
                 "updated_lagrangian" | "ul" => Formulation::UpdatedLagrangian,
@@ -432,6 +445,9 @@ impl Cx<'_> {
             None => RemeshSpec::default(),
             Some(m) => self.remesh(m, &time)?,
         };
+        if linear && remesh.enabled {
+            return Err(self.err("remesh.enabled", "true with model.kinematics = \"linear\": small strains keep the reference configuration; expected false"));
+        }
         Ok(Case {
             title,
             formulation,
