@@ -361,7 +361,14 @@ impl Assembler {
             let el = &model.elements[e];
             let xx0 = el.map(|n| model.x0[n]);
             let ue = el.map(|n| [u[2 * n], u[2 * n + 1]]);
-            let law = &model.materials[model.elem_material[e]];
+            let material = &model.materials[model.elem_material[e]];
+            let ps;
+            let law: &dyn crate::material::ConstitutiveLaw = if model.plane_stress {
+                ps = crate::material::plane_stress::PlaneStress { law: material };
+                &ps
+            } else {
+                material
+            };
             // a missing entry is reported as an invalid (NaN) ratio of this element
             let j0e = j0.map_or(Some(1.0), |v| v.get(e).copied()).unwrap_or(f64::NAN);
             match model.element {

@@ -47,6 +47,7 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
     let model = Model {
         title: "benchmark block".into(),
         formulation: Formulation::UpdatedLagrangian,
+        plane_stress: false,
         element: crate::element::ElementKind::Q1P0,
         loading: crate::loading::Loading {
             prescribed: bottom

@@ -375,7 +375,7 @@ fn reference_gradients(xx0: &[[f64; 2]; 4], xi: f64, eta: f64) -> Result<(f64, [
 
 /// The law's response at a Gauss point with the in-plane deformation gradient `f2`, relative
 /// to an element reference configuration with initial volume ratio j₀: τ′/j₀ and c/j₀ (module
-/// docs), returned with J = det F and F⁻¹. `inv_j0` = 1/j₀ (exactly 1 for j₀ = 1, which leaves
+/// docs), returned with J = det F (λ₃ det F₂ in plane stress) and F⁻¹ (in-plane). `inv_j0` = 1/j₀ (exactly 1 for j₀ = 1, which leaves
 /// the response unchanged bit for bit). An error if F is inverted (J ≤ 0).
 fn law_response(
     law: &dyn ConstitutiveLaw,
@@ -392,7 +392,9 @@ fn law_response(
     let mut r = law.update(&ff, old, inc)?;
     r.tau.iter_mut().for_each(|v| *v *= inv_j0);
     r.cc.iter_mut().flatten().for_each(|v| *v *= inv_j0);
-    Ok((jac, f_inv, r))
+    // (plane stress: the volume ratio counts the thickness stretch, so that τ / J is the Cauchy
+    // stress; the forces, per unit reference thickness, use τ and do not see it)
+    Ok((jac * r.thickness, f_inv, r))
 }
 
 /// Cauchy stress `[xx, yy, xy, zz]` = τ′/J + p I of a Gauss point.
@@ -453,7 +455,7 @@ pub fn evaluate(formulation: Formulation, input: ElementInput<'_>, out: &mut Ele
     for (q, gp) in GAUSS.iter().enumerate() {
         let (det_j0, dn_dx0) = reference_gradients(xx0, gp[0], gp[1])?;
         let f2 = compatible_gradient(uu, &dn_dx0);
-        let (jac, f_inv, MatResponse { tau, cc, state }) = law_response(law, &f2, &old[q], inc, inv_j0)?;
+        let (jac, f_inv, MatResponse { tau, cc, state, .. }) = law_response(law, &f2, &old[q], inc, inv_j0)?;
         let w0 = det_j0; // Gauss weight 1, unit thickness: dV₀ = det J0
 
         out.gauss[q] = GaussOut { sig: cauchy(&tau, jac, p), state };
@@ -579,7 +581,7 @@ pub fn evaluate_linear(input: ElementInput<'_>, out: &mut ElementOut) -> Result<
             }
         }
         let f2 = exp_sym2(grad[0][0], 0.5 * (grad[0][1] + grad[1][0]), grad[1][1]);
-        let (_, _, MatResponse { tau, cc, state }) = law_response(law, &f2, &old[q], inc, 1.0)?;
+        let (_, _, MatResponse { tau, cc, state, .. }) = law_response(law, &f2, &old[q], inc, 1.0)?;
         out.gauss[q] = GaussOut { sig: cauchy(&tau, 1.0, p), state };
         let mut bl = [[0.0; 8]; 3];
         for a in 0..4 {
@@ -715,7 +717,7 @@ pub fn evaluate_enhanced(input: ElementInput<'_>, alpha: &mut [f64; N_ENH], out:
                     }
                 }
             }
-            let (jac, f_inv, MatResponse { tau, cc, state }) = law_response(law, &f2, &old[q], inc, inv_j0)?;
+            let (jac, f_inv, MatResponse { tau, cc, state, .. }) = law_response(law, &f2, &old[q], inc, inv_j0)?;
             out.gauss[q] = GaussOut { sig: cauchy(&tau, jac, p), state };
             let t = voigt_congruence(&f_inv);
             let s = pull_back_stress(&t, &tau);

@@ -97,6 +97,9 @@ pub struct StopSpec {
 pub struct Model {
     pub title: String,
     pub formulation: Formulation,
+    /// Plane stress instead of plane strain (`[model] plane = "stress"`): every law through
+    /// [`crate::material::plane_stress::PlaneStress`], no mean-dilatation pressure.
+    pub plane_stress: bool,
     /// Element technology of every element.
     pub element: ElementKind,
     /// Walls, prescribed displacements, loads and their amplitudes.

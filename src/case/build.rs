@@ -178,6 +178,7 @@ impl Model {
         Ok(Self {
             title: case.title.clone(),
             formulation: case.formulation,
+            plane_stress: case.plane_stress,
             element: case.element,
             loading,
             contact: case.contact.clone(),

@@ -113,6 +113,8 @@ impl CaseError {
 pub struct Case {
     pub title: String,
     pub formulation: Formulation,
+    /// Plane stress (`[model] plane = "stress"`) instead of plane strain.
+    pub plane_stress: bool,
     /// Element technology (`[model] element`).
     pub element: crate::element::ElementKind,
     pub materials: Vec<MaterialSpec>,

@@ -234,6 +234,7 @@ pub struct Model {
     pub formulation: Option<String>,
     pub element: Option<String>,
     pub kinematics: Option<String>,
+    pub plane: Option<String>,
 }
 
 #[derive(Deserialize)]

@@ -251,6 +251,11 @@ impl Cx<'_> {
                 }
             },
         };
+        let plane_stress = match r.model.as_ref().and_then(|m| m.plane.clone()).as_deref() {
+            None | Some("strain") => false,
+            Some("stress") => true,
+            Some(p) => return Err(self.err("model.plane", format!("value \"{p}\"; expected \"strain\" (plane strain, the default) or \"stress\" (plane stress: thin sheets, σ_zz = 0)"))),
+        };
         let kinematics = r.model.as_ref().and_then(|m| m.kinematics.clone());
         let linear = match kinematics.as_deref() {
             None | Some("finite") => false,
@@ -445,12 +450,16 @@ impl Cx<'_> {
             None => RemeshSpec::default(),
             Some(m) => self.remesh(m, &time)?,
         };
+        if plane_stress && remesh.enabled {
+            return Err(self.err("remesh.enabled", "true with model.plane = \"stress\": the thickness condition is solved on the original configuration and a re-mesh would lose it; expected false"));
+        }
         if linear && remesh.enabled {
             return Err(self.err("remesh.enabled", "true with model.kinematics = \"linear\": small strains keep the reference configuration; expected false"));
         }
         Ok(Case {
             title,
             formulation,
+            plane_stress,
             element,
             materials,
             bodies,

@@ -333,6 +333,7 @@ impl ConstitutiveLaw for Creep {
         Ok(MatResponse {
             tau: out.tau,
             cc: out.cc,
+            thickness: 1.0,
             state,
         })
     }

@@ -51,6 +51,7 @@ impl ConstitutiveLaw for Elastic {
         Ok(MatResponse {
             tau: out.tau,
             cc: out.cc,
+            thickness: 1.0,
             state: *old,
         })
     }

@@ -72,6 +72,7 @@ impl ConstitutiveLaw for J2Plastic {
         Ok(MatResponse {
             tau: out.tau,
             cc: out.cc,
+            thickness: 1.0,
             state,
         })
     }

@@ -27,6 +27,7 @@ pub mod elastic;
 pub mod hardening;
 pub mod j2;
 pub mod logstrain;
+pub mod plane_stress;
 
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -76,6 +77,9 @@ pub struct MatResponse {
     pub tau: [f64; 4],
     /// Spatial tangent c (3×3 Voigt, see module docs), MPa.
     pub cc: [[f64; 3]; 3],
+    /// The through-thickness stretch λ₃ = F₃₃ the response is for: 1 in plane strain; in
+    /// plane stress ([`plane_stress::PlaneStress`]) the one that makes σ₃₃ vanish.
+    pub thickness: f64,
     /// Updated state (uncommitted).
     pub state: MatState,
 }

@@ -266,7 +266,10 @@ impl Simulation {
         for e in 0..ne {
             let m = &model.materials[model.elem_material[e]];
             g_max = g_max.max(m.shear_modulus());
+            // (plane stress: the volumetric response is the law's, in the thickness condition;
+            // the element carries no mean-dilatation pressure)
             match m.bulk_modulus() {
+                _ if model.plane_stress => {}
                 Some(k) => kappa[e] = k,
                 None => {
                     kappa[e] = spec.incompressible_penalty * m.shear_modulus();
