@@ -1,5 +1,9 @@
 //! The four-node isoparametric plane-strain element in Bathe's incremental form, total and
 //! updated Lagrangian, with a mean-dilatation (Q1/P0) volumetric part that does not lock.
+//! Plane stress is the same element with the law wrapped in
+//! [`crate::material::plane_stress::PlaneStress`] (which returns the whole in-plane stress and
+//! the thickness stretch) and no mean-dilatation pressure; small strains are
+//! [`evaluate_linear`].
 //!
 //! ## Deviatoric part (per Gauss point, 2×2 Gauss rule)
 //! The law returns the deviatoric Kirchhoff stress τ′ and its spatial tangent c (see
