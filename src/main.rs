@@ -153,8 +153,8 @@ fn main() -> ExitCode {
         false => tracing_subscriber::EnvFilter::new(level),
     };
     // colour codes only on a terminal: a log redirected to a file (a batch job's stderr) stays
-    // plain text
-    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    // plain text; NO_COLOR (no-color.org) turns them off on a terminal too
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr()) && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty());
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(false).with_ansi(ansi).init();
 
     match cli.command {

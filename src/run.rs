@@ -87,7 +87,7 @@ impl Progress<'_> {
             (Some(p), None) => format!("solid ratio {p:.4} | "),
             _ => String::new(),
         };
-        format!("{density}t {:.4e} s | step {} | dt {:.2e} | {} it", r.time, r.step, r.dt, r.newton_iterations)
+        format!("{density}t {} s | step {} | dt {} s | {} it", seconds(r.time), r.step, seconds(r.dt), r.newton_iterations)
     }
 }
 
@@ -331,6 +331,53 @@ fn signal_name(sig: usize) -> String {
 }
 
 /// Report `text` as an error (on rank 0) and return it as [`RunOutcome::BadInput`].
+/// A time for a message: nine decimals at most, without trailing zeros (a step sum such as
+/// 1.3450000000000002 reads 1.345).
+pub fn seconds(t: f64) -> String {
+    let s = format!("{t:.9}");
+    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
+    if s == "-0" { "0".to_string() } else { s.to_string() }
+}
+
+/// Why an output folder could not be locked.
+enum LockError {
+    /// Another process holds it (the message names it).
+    Busy(String),
+    Io(RunError),
+}
+
+/// The advisory lock of the output folder `out` (created if needed): `out/.mpfem.lock`, locked
+/// with the operating system's file lock (released when the process ends, however it ends, so
+/// a killed run leaves no stale lock) and holding the process id and the start time for the
+/// message a second run gets. On a file system without locks the run goes on with a warning.
+fn lock_output(out: &Path) -> Result<Option<std::fs::File>, LockError> {
+    use std::io::{Read, Seek, Write};
+    std::fs::create_dir_all(out).map_err(|source| LockError::Io(RunError::OutputDir { dir: out.to_path_buf(), source }))?;
+    let path = out.join(".mpfem.lock");
+    let mut f = std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(false).open(&path).map_err(|source| LockError::Io(RunError::OutputDir { dir: out.to_path_buf(), source }))?;
+    match f.try_lock() {
+        Ok(()) => {
+            let stamp = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+            let _ = f.set_len(0).and_then(|_| f.rewind()).and_then(|_| writeln!(f, "pid {} started at unix time {stamp}", std::process::id())).and_then(|_| f.flush());
+            Ok(Some(f))
+        }
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut who = String::new();
+            let _ = f.read_to_string(&mut who);
+            let who = who.trim();
+            Err(LockError::Busy(format!(
+                "another mpfem run is writing into {} ({}); wait for it to end or choose another --out",
+                out.display(),
+                if who.is_empty() { "its process id is not recorded yet" } else { who }
+            )))
+        }
+        Err(std::fs::TryLockError::Error(e)) => {
+            tracing::warn!(path = %path.display(), %e, "cannot lock the output folder (no file locks on this file system?): two runs into it would mix their files");
+            Ok(None)
+        }
+    }
+}
+
 fn bad_input(root: bool, reporter: &dyn Reporter, text: String) -> RunOutcome {
     if root {
         reporter.note(Note::Error, &text);
@@ -416,10 +463,27 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             }
         }
     }
+    // one run per output folder: rank 0 holds its lock for the whole run, and every rank
+    // learns whether it got it (the others would otherwise wait for rank 0 in their solve)
+    let lock = if root { Some(lock_output(out)) } else { None };
+    let mut locked = [match &lock {
+        Some(Err(_)) => 0.0,
+        _ => 1.0,
+    }];
+    comm.broadcast(&mut locked);
+    if locked[0] == 0.0 {
+        let text = match lock {
+            Some(Err(LockError::Busy(text))) => text,
+            Some(Err(LockError::Io(e))) => return Err(e),
+            _ => format!("another mpfem run is writing into {}", out.display()),
+        };
+        return Ok(bad_input(root, reporter, text));
+    }
     if !root {
         return run_rank(&c, comm, checkpoint);
     }
-    std::fs::create_dir_all(out).map_err(|source| RunError::OutputDir { dir: out.to_path_buf(), source })?;
+    // (held until the run returns)
+    let _lock = lock;
     let model = match Model::from_case(&c) {
         Ok(m) => m,
         Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
@@ -448,7 +512,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
             };
             copy_run_files(&from, out)?;
-            reporter.note(Note::Info, &format!("restarting from {} at step {step}, t = {time} s", path.display()));
+            reporter.note(Note::Info, &format!("restarting from {} at step {step}, t = {} s", path.display(), seconds(time)));
             (sim, Some((step, time, path, state)))
         }
     };
@@ -585,7 +649,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             };
             match crate::checkpoint::write(out, s, &sha, &state) {
                 Ok(p) => {
-                    reporter.note(Note::Info, &format!("checkpoint at step {}, t = {:.6e} s: {}", r.step, r.time, p.display()));
+                    reporter.note(Note::Info, &format!("checkpoint at step {}, t = {} s: {}", r.step, seconds(r.time), p.display()));
                     ckpt_written = Some(r.step);
                     ckpt_failed = false;
                 }
@@ -654,7 +718,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let outcome = match result {
         Ok(s) if s.interrupted => {
             let checkpoint = ckpt_written == Some(s.steps) && !ckpt_failed;
-            reporter.note(Note::Info, &format!("{} at t = {} s after {} steps; results up to it are in {}", s.stop_reason, s.final_time, s.steps, out.display()));
+            reporter.note(Note::Info, &format!("{} at t = {} s after {} steps; results up to it are in {}", s.stop_reason, seconds(s.final_time), s.steps, out.display()));
             if checkpoint {
                 let again = match &case_file {
                     Some(cf) => format!("mpfem run {} --out {} --restart {}", cf.path, out.display(), out.display()),
@@ -670,7 +734,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             let text = format!(
                 "completed ({}) t = {} s in {} steps, {} Newton iterations, {} cut-backs, {:.2} s wall; volume error {:.2e}",
                 s.stop_reason,
-                s.final_time,
+                seconds(s.final_time),
                 s.steps,
                 s.newton_iterations,
                 s.cutbacks,
@@ -694,7 +758,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             RunOutcome::Completed(s)
         }
         Err(e) => {
-            reporter.note(Note::Error, &format!("the run stopped at t = {} s: {e}", sim.sol.time));
+            reporter.note(Note::Error, &format!("the run stopped at t = {} s: {e}", seconds(sim.sol.time)));
             let text = match &results {
                 Some(w) => format!(
                     "results up to the last converged step are in {}, {}, {} and {}",

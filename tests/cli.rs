@@ -3,7 +3,7 @@
 //! keeps every row written so far.
 
 mod common;
-use common::{mpfem, tmpdir};
+use common::{mpfem, root, tmpdir};
 
 #[test]
 fn default_job_runs_and_writes_history_and_summary() {
@@ -82,6 +82,34 @@ fn a_redirected_log_has_no_colour_codes() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("DEBUG"), "the debug log is on stderr: {err}");
     assert!(!err.contains('\u{1b}'), "colour codes in a redirected log: {err}");
+}
+
+/// One run per output folder (issue 23): a run takes the folder's lock (`.mpfem.lock`, the
+/// system's file lock, released however the process ends); a second run into a locked folder
+/// exits 2 naming the holder and writes nothing, and runs once the lock is released. Times in
+/// the closing lines read as a person writes them (`t = 1 s`, not `1e0` or `1.0000000000000002`).
+#[test]
+fn a_second_run_into_a_locked_folder_exits_2_naming_the_first() {
+    let dir = tmpdir("locked");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let case = root().join("jobs/verification/coulomb_block.toml");
+    // the folder held by "another run": this test process, with its pid in the file
+    let mut holder = std::fs::OpenOptions::new().read(true).write(true).create(true).truncate(true).open(out.join(".mpfem.lock")).unwrap();
+    holder.lock().unwrap();
+    std::io::Write::write_all(&mut holder, b"pid 4242 started at unix time 0\n").unwrap();
+    let o = mpfem().args(["run", "--quiet", "--no-plots", "--out"]).arg(&out).arg(&case).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("another mpfem run is writing into") && err.contains("pid 4242"), "{err}");
+    assert!(!out.join("history.csv").exists(), "the second run wrote into the locked folder");
+    drop(holder);
+    let o = mpfem().args(["run", "--no-plots", "--out"]).arg(&out).arg(&case).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("completed (end time) t = 1 s in 20 steps"), "{err}");
+    let lock = std::fs::read_to_string(out.join(".mpfem.lock")).unwrap();
+    assert!(lock.starts_with("pid ") && !lock.contains("4242"), "{lock}");
 }
 
 /// faer 0.24's indefinite sparse Cholesky fallback (the intranode Bunch–Kaufman LBLᵀ) fails an
