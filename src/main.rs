@@ -213,8 +213,51 @@ fn main() -> ExitCode {
     }
 }
 
-/// `mpfem check`: exit 0 when the case makes a model without inverted elements, else 2.
+/// Whether `path` is a study file (top-level `sweep`, `runs` or `base`) rather than a case.
+fn is_study(path: &Path) -> bool {
+    std::fs::read_to_string(path).ok().and_then(|t| t.parse::<toml::Table>().ok()).is_some_and(|t| ["sweep", "runs", "base"].iter().any(|k| t.contains_key(*k)))
+}
+
+/// `mpfem check STUDY.toml`: every run the study would make, checked as `mpfem check` checks a
+/// case (one line each); exit 2 when the study file or any run is invalid.
+fn check_study(path: &Path) -> ExitCode {
+    let study = match mpfem::study::load(path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut failed = 0;
+    for r in &study.runs {
+        let dir = r.case_path.parent().unwrap_or(Path::new("."));
+        let checked = case::parse(&r.text, dir).map_err(|e| e.to_string()).and_then(|c| mpfem::run::check(&c).map_err(|e| e.to_string()));
+        match checked {
+            Ok(k) if k.n_inverted == 0 => println!("{}: run \"{}\": OK — {} nodes, {} elements, min scaled Jacobian {:.3}", path.display(), r.label, k.n_nodes, k.n_elements, k.min_scaled_jacobian),
+            Ok(k) => {
+                eprintln!("error: {}: run \"{}\" ({}): the mesh has {} inverted element(s)", path.display(), r.label, r.case_path.display(), k.n_inverted);
+                failed += 1;
+            }
+            Err(e) => {
+                eprintln!("error: {}: run \"{}\" ({}): {e}", path.display(), r.label, r.case_path.display());
+                failed += 1;
+            }
+        }
+    }
+    if failed > 0 {
+        eprintln!("error: {}: {failed} of {} run(s) invalid", path.display(), study.runs.len());
+        return ExitCode::from(2);
+    }
+    println!("{}: OK — study \"{}\", {} run(s)", path.display(), study.title, study.runs.len());
+    ExitCode::SUCCESS
+}
+
+/// `mpfem check`: exit 0 when the case makes a model without inverted elements, else 2; a study
+/// file has each of its runs checked.
 fn check(case: &Path) -> ExitCode {
+    if is_study(case) {
+        return check_study(case);
+    }
     let checked = case::load(case).map_err(|e| e.to_string()).and_then(|c| mpfem::run::check(&c).map(|k| (c, k)).map_err(|e| e.to_string()));
     let (c, k) = match checked {
         Ok(ck) => ck,

@@ -126,3 +126,28 @@ fn shipped_studies_load_and_their_cases_are_valid() {
     }
     assert!(n >= 3, "studies found: {n}");
 }
+
+/// `mpfem check STUDY.toml` (issue 23) checks every run the study would make, one line each:
+/// exit 0 when all are valid, else 2 naming the run and the key of the bad one.
+#[test]
+fn check_validates_every_run_of_a_study() {
+    let dir = tmpdir("check");
+    let base = root().join("tests/data/discs_coarse.toml");
+    let text = |bad: &str| {
+        format!(
+            "title = \"checked\"\nbase = \"{}\"\n\n[[runs]]\nlabel = \"plain\"\n\n[[runs]]\nlabel = \"rubbing\"\nset = {{ \"contact.contact\" = \"rubbing\", \"contact.friction\" = {bad} }}\n",
+            base.display()
+        )
+    };
+    let file = dir.join("study.toml");
+    std::fs::write(&file, text("0.2")).unwrap();
+    let o = mpfem().arg("check").arg(&file).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out} {}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("run \"plain\": OK") && out.contains("run \"rubbing\": OK") && out.contains("2 run(s)"), "{out}");
+    std::fs::write(&file, text("-0.2")).unwrap();
+    let o = mpfem().arg("check").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("run \"rubbing\"") && err.contains("contact.friction") && err.contains("1 of 2 run(s) invalid"), "{err}");
+}
