@@ -211,7 +211,7 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
 
 /// What `mpfem check` tells of a case without running it: the size of its model and the
 /// quality of its meshes (over every body).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct CaseCheck {
     pub n_nodes: usize,
     pub n_elements: usize,
@@ -222,6 +222,8 @@ pub struct CaseCheck {
     /// Largest longest-over-shortest edge ratio of any element.
     pub max_aspect_ratio: f64,
     pub n_inverted: usize,
+    /// The bodies with inverted elements: (index in `bodies`, name, how many).
+    pub inverted_bodies: Vec<(usize, String, usize)>,
 }
 
 /// Build the model of case `c` and measure its meshes ([`crate::mesh::quality::quality`]).
@@ -238,12 +240,16 @@ pub fn check(c: &Case) -> Result<CaseCheck, crate::model::ModelError> {
         min_scaled_jacobian: f64::INFINITY,
         max_aspect_ratio: 0.0,
         n_inverted: 0,
+        inverted_bodies: Vec::new(),
     };
-    for b in &m.bodies {
+    for (i, b) in m.bodies.iter().enumerate() {
         let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
         k.min_scaled_jacobian = k.min_scaled_jacobian.min(q.min_scaled_jacobian);
         k.max_aspect_ratio = k.max_aspect_ratio.max(q.max_aspect_ratio);
         k.n_inverted += q.n_inverted;
+        if q.n_inverted > 0 {
+            k.inverted_bodies.push((i, b.name.clone(), q.n_inverted));
+        }
     }
     Ok(k)
 }

@@ -128,6 +128,20 @@ fn syntax_error_has_line() {
     assert_has(&e, &["line 6"]);
 }
 
+/// Issue 23: the parser's "duplicate key" names the key, and its recursion limit (no position
+/// from the parser) names the line nested deepest.
+#[test]
+fn duplicate_keys_and_deep_nesting_are_named() {
+    let e = err_of(&with("poisson_ratio = 0.3", "poisson_ratio = 0.3\npoisson_ratio = 0.4"));
+    assert_has(&e, &["line 7", "duplicate key `poisson_ratio`"]);
+    let e = err_of(&format!("{BASE}\n[stop]\nsolid_ratio = 0.9\n[stop]\njam = true\n"));
+    assert_has(&e, &["duplicate key `stop`"]);
+    let deep = format!("{BASE}\n{} = 1\n", vec!["a"; 300].join("."));
+    let line = deep.lines().count();
+    let e = err_of(&deep);
+    assert_has(&e, &[&format!("line {line}"), "nested too deeply"]);
+}
+
 #[test]
 fn youngs_modulus_must_be_positive() {
     for v in ["0.0", "-5.0"] {

@@ -102,12 +102,28 @@ fn line_col(text: &str, pos: usize) -> (usize, usize) {
 }
 
 pub(super) fn toml_error(text: &str, loc: Option<&Locator>, e: &toml::de::Error) -> CaseError {
-    let msg = e.message().trim().replace('\n', "; ");
+    let mut msg = e.message().trim().replace('\n', "; ");
     match e.span() {
         Some(span) => {
             let (line, col) = line_col(text, span.start);
             let key = loc.and_then(|l| l.path_at(span.start)).unwrap_or_default();
+            // the parser says "duplicate key" without the key: it is the text the error points
+            // at (up to the `=` of its line)
+            if msg == "duplicate key" {
+                let at = text.get(span.start..).unwrap_or("");
+                let name = at.lines().next().unwrap_or("").split('=').next().unwrap_or("").trim().trim_matches(['[', ']']).trim();
+                if !name.is_empty() {
+                    msg = format!("duplicate key `{name}` (given twice in the same table); expected each key once");
+                }
+            }
             CaseError::new(key, format!("line {line}, column {col}: {msg}"))
+        }
+        None if msg.contains("recursion limit") => {
+            // no position from the parser: name the line nested deepest (dotted keys, nested
+            // tables or arrays)
+            let depth = |l: &str| l.matches(['.', '[', '{']).count();
+            let (n, _) = text.lines().enumerate().max_by_key(|(_, l)| depth(l)).unwrap_or((0, ""));
+            CaseError::new("", format!("line {}: nested too deeply (the parser's recursion limit); expected keys and tables a few levels deep", n + 1))
         }
         None => CaseError::new("", format!("invalid case file: {msg}")),
     }
