@@ -172,3 +172,29 @@ every = 0
     assert!(dir.join("out/history.csv").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Absurd sizes (issue 23, item 1): a mesh_size of 1e-12 mm or a rectangle 1e20 mm long made
+/// the allocator abort (exit 134) while meshing; the element count is estimated first and a
+/// mesh that cannot fit in the machine's memory is refused with exit 2 naming the body and
+/// its mesh_size, by `check` and by `run`.
+#[test]
+fn absurd_mesh_sizes_are_refused_before_meshing() {
+    let dir = tmpdir("absurd");
+    let base = "[[materials]]\nname = \"m\"\nmodel = \"elastic\"\nyoungs_modulus = 1000.0\npoisson_ratio = 0.3\n\n[[bodies]]\nname = \"b\"\nmaterial = \"m\"\nmesh_size = H\nshape = { type = \"rectangle\", origin = [0.0, 0.0], size = [W, 20.0] }\n\n[time]\nend = 1.0\ndt = 0.5\n";
+    for (h, w) in [("1e-12", "20.0"), ("1.0", "1e20"), ("1e-9", "20.0")] {
+        let case = dir.join("case.toml");
+        std::fs::write(&case, base.replace("H", h).replace("W", w)).unwrap();
+        for args in [vec!["check"], vec!["run", "--quiet", "--no-plots", "--out"]] {
+            let mut cmd = mpfem();
+            cmd.args(&args);
+            if args[0] == "run" {
+                cmd.arg(dir.join("out"));
+            }
+            let o = cmd.arg(&case).output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "mesh_size {h}, width {w}, {args:?}: {err}");
+            assert!(err.contains("bodies[0]") && err.contains("mesh_size") && err.contains("elements"), "{err}");
+            assert!(!err.contains("panicked") && !err.contains("memory allocation"), "{err}");
+        }
+    }
+}
