@@ -499,14 +499,7 @@ pub fn evaluate(formulation: Formulation, input: ElementInput<'_>, out: &mut Ele
                 }
                 let dv = w0 * jac;
                 let sig = [tau[0] / jac, tau[1] / jac, tau[2] / jac];
-                let mut bl = [[0.0; 8]; 3];
-                for a in 0..4 {
-                    let (n1, n2) = (dn_dx[a][0], dn_dx[a][1]);
-                    bl[0][2 * a] = n1;
-                    bl[1][2 * a + 1] = n2;
-                    bl[2][2 * a] = n2;
-                    bl[2][2 * a + 1] = n1;
-                }
+                let bl = small_strain_b(&dn_dx);
                 for i in 0..8 {
                     out.f_int[i] += dv * (bl[0][i] * sig[0] + bl[1][i] * sig[1] + bl[2][i] * sig[2]);
                 }
@@ -587,14 +580,7 @@ pub fn evaluate_linear(input: ElementInput<'_>, out: &mut ElementOut) -> Result<
         let f2 = exp_sym2(grad[0][0], 0.5 * (grad[0][1] + grad[1][0]), grad[1][1]);
         let (_, _, MatResponse { tau, cc, state, .. }) = law_response(law, &f2, &old[q], inc, 1.0)?;
         out.gauss[q] = GaussOut { sig: cauchy(&tau, 1.0, p), state };
-        let mut bl = [[0.0; 8]; 3];
-        for a in 0..4 {
-            let (n1, n2) = (dn_dx0[a][0], dn_dx0[a][1]);
-            bl[0][2 * a] = n1;
-            bl[1][2 * a + 1] = n2;
-            bl[2][2 * a] = n2;
-            bl[2][2 * a + 1] = n1;
-        }
+        let bl = small_strain_b(&dn_dx0);
         for i in 0..8 {
             out.f_int[i] += det_j0 * (bl[0][i] * tau[0] + bl[1][i] * tau[1] + bl[2][i] * tau[2]);
         }
@@ -603,6 +589,22 @@ pub fn evaluate_linear(input: ElementInput<'_>, out: &mut ElementOut) -> Result<
         }
     }
     Ok(())
+}
+
+/// The small-strain operator B (rows ε_xx, ε_yy, 2ε_xy; columns (u_a, v_a)) of the shape
+/// function gradients `dn` (the updated Lagrangian's in current coordinates, the small-strain
+/// element's in reference ones).
+#[inline]
+fn small_strain_b(dn: &[[f64; 2]; 4]) -> [[f64; 8]; 3] {
+    let mut bl = [[0.0; 8]; 3];
+    for a in 0..4 {
+        let (n1, n2) = (dn[a][0], dn[a][1]);
+        bl[0][2 * a] = n1;
+        bl[1][2 * a + 1] = n2;
+        bl[2][2 * a] = n2;
+        bl[2][2 * a + 1] = n1;
+    }
+    bl
 }
 
 /// kk += w B_Lᵀ D B_L

@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(name = "mpfem", version, about = "Multi-particle finite elements: large-deformation plane-strain solver for the compaction of deformable particles (units: mm, N, MPa, s)")]
+#[command(name = "mpfem", version, about = "Multi-particle finite elements: large-deformation plane-strain (or plane-stress) solver for the compaction of deformable particles (units: mm, N, MPa, s)")]
 struct Cli {
     /// More log output (-v info, -vv debug); RUST_LOG overrides.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
@@ -111,7 +111,7 @@ enum Command {
         #[arg(long)]
         parallel: Option<usize>,
     },
-    /// Validate a case file without running it.
+    /// Validate a case file (or every run of a study file) without running it.
     Check {
         case: PathBuf,
     },

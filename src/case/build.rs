@@ -24,7 +24,7 @@ fn machine_memory() -> Option<f64> {
 /// O-grids and polygon meshes take up to twice area / h²), before any allocation.
 pub fn estimated_elements(b: &BodySpec) -> f64 {
     let h = b.mesh_size;
-    let div = |i: usize, len: f64| b.divisions.map_or_else(|| (len.abs() / h).ceil().max(1.0), |d| d[i] as f64);
+    let div = |i: usize, len: f64| b.divisions.map_or_else(|| shapes::divisions_for(len.abs(), h) as f64, |d| d[i] as f64);
     let area = |a: f64| 2.0 * (a.abs() / (h * h)).max(1.0);
     match &b.shape {
         ShapeSpec::Rectangle { size, .. } => div(0, size[0]) * div(1, size[1]),

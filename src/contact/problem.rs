@@ -155,8 +155,12 @@ impl NodalContact {
             // an edge e = (Δx, Δy) has the outward normal (Δy, −Δx)/ℓ; the force faces it when
             // it points along the inward normal: −f·n ≥ cos 30° |f|
             let faces = |e: &[f64; 2]| -(f[0] * e[1] - f[1] * e[0]) >= FACING * size * e[0].hypot(e[1]);
-            let facing: Vec<[f64; 2]> = all.iter().copied().filter(|e| faces(e)).collect();
-            let used: &[[f64; 2]] = if facing.is_empty() { all } else { &facing };
+            let (mut facing, mut nf) = ([[0.0; 2]; 2], 0);
+            for e in all.iter().filter(|e| faces(e)) {
+                facing[nf] = *e;
+                nf += 1;
+            }
+            let used: &[[f64; 2]] = if nf == 0 { all } else { &facing[..nf] };
             let length: f64 = used.iter().map(|e| 0.5 * e[0].hypot(e[1])).sum();
             // the sum of the edge vectors is the length-weighted mean direction
             let d = used.iter().fold([0.0; 2], |s, e| [s[0] + e[0], s[1] + e[1]]);
@@ -667,7 +671,6 @@ impl ContactProblem {
                 stats.max_penetration = stats.max_penetration.max(-gap);
             }
         }
-        self.trial_nodal.set_tractions(x, &self.boundary.segments);
         stats
     }
 
@@ -858,7 +861,6 @@ impl ContactProblem {
                 }
             }
         }
-        self.trial_nodal.set_tractions(x, &self.boundary.segments);
         stats
     }
 
@@ -932,8 +934,11 @@ impl ContactProblem {
     }
 
     /// Commit the trial histories of the last evaluation (after a converged step).
-    pub fn commit(&mut self) {
+    /// Commit the last evaluation, at coordinates `x` (the converged state): the pair
+    /// histories and the nodal results, whose pressure and shear are formed here, once a step.
+    pub fn commit(&mut self, x: &[[f64; 2]]) {
         self.set.commit(&self.boundary);
+        self.trial_nodal.set_tractions(x, &self.boundary.segments);
         self.nodal.clone_from(&self.trial_nodal);
         if self.spec.method == ContactMethod::Lagrange {
             self.lm.committed = self.lm.keys.iter().zip(&self.lm.lambda).filter(|(_, &l)| l > 0.0).map(|(k, &l)| (*k, l)).collect();

@@ -324,15 +324,24 @@ impl Simulation {
         b.eval.add_gradient(&mut sys.f_int);
         // the lagged friction: its slip since the start of the step
         let eps = FRICTION_EPS * b.h_min;
-        // (a wall pair's friction force on its wall, for the statistics)
-        let mut wall_friction = Vec::new();
+        // the whole force of the particles on each wall (the statistics): the wall pairs'
+        // barrier terms, and below their lagged friction
+        let mut wall_load = vec![[0.0; 2]; b.eval.wall_force.len()];
+        for w in &b.eval.walls {
+            wall_load[w.wall][0] += w.term.grad[0];
+            wall_load[w.wall][1] += w.term.grad[1];
+        }
         for fp in &b.friction {
             let t = fp.term(u, &self.sol.u, eps);
             for i in 0..fp.width {
                 sys.f_int[fp.dofs[i]] += t.grad[i];
             }
+            // (a wall pair: its id is (node, usize::MAX − wall))
             if fp.block.is_none() {
-                wall_friction.push((usize::MAX - fp.id.1, [t.grad[0], t.grad[1]]));
+                if let Some(load) = wall_load.get_mut(usize::MAX - fp.id.1) {
+                    load[0] += t.grad[0];
+                    load[1] += t.grad[1];
+                }
             }
             if tangent {
                 match fp.block {
@@ -379,17 +388,6 @@ impl Simulation {
                 let i = b.pattern.binary_search(&(b.contact.edge_key(q.edge), q.segment)).expect("the pattern holds every pair within d̂");
                 sys.maps.pairs.add(&mut sys.kk.values, i, q.term.hess.as_flattened());
             }
-        }
-        // the whole force of the particles on each wall: the wall pairs' barrier and lagged
-        // friction terms in the internal force
-        let mut wall_load = vec![[0.0; 2]; b.eval.wall_force.len()];
-        for w in &b.eval.walls {
-            wall_load[w.wall][0] += w.term.grad[0];
-            wall_load[w.wall][1] += w.term.grad[1];
-        }
-        for (w, f) in wall_friction {
-            wall_load[w][0] += f[0];
-            wall_load[w][1] += f[1];
         }
         self.contact_stats = ContactStats {
             wall_force: b.eval.wall_force.clone(),

@@ -282,8 +282,11 @@ impl Simulation {
             }
         };
         self.springs.energy += self.springs.work(&trial.u, &self.sol.u);
-        if let Some(c) = self.contact.as_mut() {
-            c.commit();
+        if self.contact.is_some() {
+            let x = self.coords(&trial.u);
+            if let Some(c) = self.contact.as_mut() {
+                c.commit(&x);
+            }
         }
         for d in 0..self.u_prev.len() {
             self.u_prev[d] += trial.u[d] - self.sol.u[d];

@@ -348,8 +348,11 @@ impl Simulation {
         // work done against the stabilisation springs over the step (their force at the end of
         // the step times the increment)
         self.springs.energy += self.springs.work(&trial.u, &self.sol.u);
-        if let Some(c) = self.contact.as_mut() {
-            c.commit();
+        if self.contact.is_some() {
+            let x = self.coords(&trial.u);
+            if let Some(c) = self.contact.as_mut() {
+                c.commit(&x);
+            }
         }
         self.commit_barrier(&trial.u);
         self.u_prev.copy_from_slice(&self.sol.u);
