@@ -23,6 +23,9 @@ command -v python3 >/dev/null 2>&1 || need+=(python3 python3-pip)
 command -v mpirun >/dev/null 2>&1 || need+=(openmpi-bin)
 dpkg -s libopenmpi-dev >/dev/null 2>&1 || need+=(libopenmpi-dev)
 dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
+# PETSc 3.18 (with MUMPS, hypre, SuperLU_DIST, built against the same Open MPI) for the
+# `petsc` feature: the distributed linear solves ([solver] linear = "petsc", petsc/)
+dpkg -s libpetsc-real-dev >/dev/null 2>&1 || need+=(libpetsc-real-dev)
 
 if ((${#need[@]})); then
   echo "setup: installing ${need[*]}"
