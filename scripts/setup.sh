@@ -26,6 +26,10 @@ dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
 # PETSc 3.18 (with MUMPS, hypre, SuperLU_DIST, built against the same Open MPI) for the
 # `petsc` feature: the distributed linear solves ([solver] linear = "petsc", petsc/)
 dpkg -s libpetsc-real-dev >/dev/null 2>&1 || need+=(libpetsc-real-dev)
+# an optimised BLAS for MUMPS's dense kernels (Debian's PETSc links the reference BLAS by
+# default: its factorisations took 2.1 times as long, docs/scaling/README.md); the serial
+# build, so that MPI ranks do not start BLAS threads on each other's cores
+dpkg -s libopenblas0-serial >/dev/null 2>&1 || need+=(libopenblas0-serial)
 
 if ((${#need[@]})); then
   echo "setup: installing ${need[*]}"

@@ -485,6 +485,16 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         };
         return Ok(bad_input(root, reporter, text));
     }
+    // PETSc on every rank for the whole run, with the case's options (its solvers, in the
+    // simulation, are dropped before it finalises)
+    let _petsc = if c.solver.linear == crate::linalg::LinearChoice::Fixed(crate::linalg::LinearSolverKind::Petsc) {
+        match crate::linalg::petsc::start(&c.petsc_options) {
+            Ok(p) => Some(p),
+            Err(e) => return Ok(bad_input(root, reporter, format!("solver.linear = \"petsc\": cannot start PETSc with solver.petsc_options = {:?}: {e}", c.petsc_options))),
+        }
+    } else {
+        None
+    };
     if !root {
         return run_rank(&c, comm, checkpoint);
     }

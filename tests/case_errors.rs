@@ -281,6 +281,20 @@ fn other_validation_errors() {
     // bad choice strings
     let e = err_of(&format!("{BASE}\n[solver]\nlinear = \"gmres\"\n"));
     assert_has(&e, &["solver.linear", "\"gmres\"", "\"cholesky\""]);
+    // PETSc's options: only with linear = "petsc", each word of its command line an option
+    // or a value after one
+    let e = err_of(&format!("{BASE}\n[solver]\npetsc_options = \"-ksp_type cg\"\n"));
+    assert_has(&e, &["solver.petsc_options", "-ksp_type cg", "linear = \"petsc\""]);
+    if cfg!(feature = "petsc") {
+        let e = err_of(&format!("{BASE}\n[solver]\nlinear = \"petsc\"\npetsc_options = \"ksp_type cg\"\n"));
+        assert_has(&e, &["solver.petsc_options", "\"ksp_type\"", "'-'"]);
+        let c = parse(&format!("{BASE}\n[solver]\nlinear = \"petsc\"\npetsc_options = \"-ksp_type cg -pc_type gamg\"\n")).unwrap();
+        assert_eq!((c.solver.linear, c.petsc_options.as_str()), (LinearChoice::Fixed(LinearSolverKind::Petsc), "-ksp_type cg -pc_type gamg"));
+    } else {
+        // a build without PETSc says so, naming the key and how to get it
+        let e = err_of(&format!("{BASE}\n[solver]\nlinear = \"petsc\"\n"));
+        assert_has(&e, &["solver.linear", "\"petsc\"", "without PETSc", "--features petsc"]);
+    }
     // repartition threshold: an imbalance, at least 1 (1 itself is allowed)
     let e = err_of(&format!("{BASE}\n[solver]\nrepartition_imbalance = 0.9\n"));
     assert_has(&e, &["solver.repartition_imbalance", "0.9", ">= 1"]);

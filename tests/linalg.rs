@@ -207,7 +207,7 @@ fn symbolic_analysis_is_reused_for_new_values_and_redone_for_new_patterns() {
     let a = laplacian(30);
     let xs = x_star(a.nrows);
     fn exercise<S: LinearSolver>(mut s: S, analyses: impl Fn(&S) -> usize, a: &CsrMatrix, xs: &[f64]) {
-        let name = s.name();
+        let name = s.name().to_string();
         s.analyze(a).unwrap();
         assert_eq!(analyses(&s), 1);
         // analyze again with the same pattern: no new symbolic work.

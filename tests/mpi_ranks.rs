@@ -332,7 +332,7 @@ fn schwarz_pcg_on_2_to_4_ranks_matches_the_serial_runs() {
 }
 
 /// The scaling study runs from its one command (`jobs/scaling/study.sh`, here its QUICK smoke
-/// size: 4 × 4 discs strong, 2 discs a rank weak, 1 and 2 ranks, both solvers) with this
+/// size: 4 × 4 discs strong, 2 discs a rank weak, 1 and 2 ranks, every solver of the build) with this
 /// build's binary, and writes its table and both plots; every run completed.
 #[test]
 fn the_scaling_study_runs_from_one_command() {
@@ -343,6 +343,7 @@ fn the_scaling_study_runs_from_one_command() {
         .env("MPFEM", env!("CARGO_BIN_EXE_mpfem"))
         .env("QUICK", "1")
         .env("RANKS", "1 2")
+        .env("SOLVERS", if cfg!(feature = "petsc") { "cholesky pcg-schwarz mumps" } else { "cholesky pcg-schwarz" })
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_plm", "isolated")
@@ -351,9 +352,10 @@ fn the_scaling_study_runs_from_one_command() {
     assert!(o.status.success(), "study.sh: {:?}\nstdout: {}\nstderr: {}", o.status, String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(out.join("scaling.csv")).expect("scaling.csv");
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    // 2 studies × 2 solvers × 2 rank counts
-    assert_eq!(rows.len(), 8, "scaling.csv:\n{csv}");
-    for solver in ["cholesky", "pcg-schwarz"] {
+    // 2 studies × 2 (3 with PETSc) solvers × 2 rank counts
+    let solvers: &[&str] = if cfg!(feature = "petsc") { &["cholesky", "pcg-schwarz", "mumps"] } else { &["cholesky", "pcg-schwarz"] };
+    assert_eq!(rows.len(), 4 * solvers.len(), "scaling.csv:\n{csv}");
+    for solver in solvers {
         assert!(rows.iter().any(|r| r.contains(solver)), "no {solver} rows:\n{csv}");
     }
     assert!(rows.iter().all(|r| r.contains("completed")), "a run did not complete:\n{csv}");

@@ -20,11 +20,12 @@ import os
 import sys
 from xml.sax.saxutils import escape
 
-COLOURS = {"cholesky": "#1f77b4", "pcg-schwarz": "#d62728"}
-MARKERS = {"cholesky": "circle", "pcg-schwarz": "square"}
+COLOURS = {"cholesky": "#1f77b4", "pcg-schwarz": "#d62728", "mumps": "#2ca02c"}
+MARKERS = {"cholesky": "circle", "pcg-schwarz": "square", "mumps": "circle"}
 LABELS = {
     "cholesky": "cholesky (gathered, rank 0 factors)",
     "pcg-schwarz": "pcg-schwarz (distributed)",
+    "mumps": "mumps (PETSc, distributed LDLt)",
 }
 FONT = "DejaVu Sans, Helvetica, Arial, sans-serif"
 

@@ -13,10 +13,11 @@
 #   strong scaling: 16 x 16 discs (256 particles, 8 192 elements) on every rank count;
 #   weak scaling:   16 discs a rank: 1 rank 4 x 4, 2 ranks 8 x 4, 3 ranks 12 x 4, 4 ranks 8 x 8
 #                   (N ranks: 4k x 4k when N = k^2, else 4N x 4).
-# Solvers: "cholesky" (the tangent is gathered and rank 0 factors it) and "pcg-schwarz"
+# Solvers: "cholesky" (the tangent is gathered and rank 0 factors it), "pcg-schwarz"
 # (linear = "pcg", preconditioner = "schwarz", pcg_tol = 1e-8: every rank factorises the blocks
 # of its own particles; a system it fails on is solved directly on rank 0, counted in the
-# direct_fallbacks column). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
+# direct_fallbacks column) and "mumps" (linear = "petsc": PETSc with MUMPS's distributed LDLt,
+# every rank factorising its particles' rows; needs a build with --features petsc). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
 # N = 1; THREADS changes it); wall time and phases from the run's summary.json (mpirun's start-up not included);
 # assembly_s = element + contact assembly, linear_s = linear solves.
 # Time: the default 3 rounds (48 runs) took 4 min 47 s on the shared 2-core development machine
@@ -24,13 +25,14 @@
 # above are the ones the issue asks for, not cut back.
 #
 # Environment:
-#   MPFEM      the mpfem binary, built with --features mpi (default: target/release/mpfem, built
-#              with `cargo build --release --features mpi` when missing)
+#   MPFEM      the mpfem binary, built with --features petsc (or mpi, without the mumps solver;
+#              default: target/release/mpfem, built with `cargo build --release --features petsc`
+#              when missing)
 #   RANKS      rank counts (default "1 2 3 4")
 #   REPEAT     rounds over all runs (default 3; 1 with QUICK=1); scaling.csv keeps the fastest
 #   MESH_SIZE  element size in mm (default 2.5; smaller makes every job larger)
 #   THREADS    threads a rank (default 1; 0 = the node's cores divided among its ranks)
-#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz")
+#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz mumps")
 #   QUICK=1    tiny sizes (4 x 4 discs strong, 2 discs a rank weak, 2 steps), one round: a
 #              smoke run of about 20 s
 #   OMPI_MCA_mpi_yield_when_idle  default 1 here: ranks waiting in MPI give up the core (more
@@ -58,8 +60,8 @@ else
   exe=$root/${CARGO_TARGET_DIR:-target}/release/mpfem
   case ${CARGO_TARGET_DIR:-} in /*) exe=$CARGO_TARGET_DIR/release/mpfem ;; esac
   if [ ! -x "$exe" ]; then
-    echo "study.sh: $exe missing, building it (cargo build --release --features mpi)" >&2
-    cargo build --release --locked --features mpi --bin mpfem >&2 || die "the build failed"
+    echo "study.sh: $exe missing, building it (cargo build --release --features petsc)" >&2
+    cargo build --release --locked --features petsc --bin mpfem >&2 || die "the build failed"
     [ -x "$exe" ] || die "the build did not produce $exe"
   fi
 fi
@@ -75,9 +77,9 @@ repeats=${REPEAT:-3}
 mesh_size=${MESH_SIZE:-2.5}
 # threads per rank (mpfem run --threads): 1 by default; 0 divides the node's cores among the ranks
 threads=${THREADS:-1}
-solvers=${SOLVERS:-cholesky pcg-schwarz}
+solvers=${SOLVERS:-cholesky pcg-schwarz mumps}
 for s in $solvers; do
-  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || die "SOLVERS must name cholesky and/or pcg-schwarz, got '$solvers'"
+  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || [ "$s" = mumps ] || die "SOLVERS must name cholesky, pcg-schwarz and/or mumps, got '$solvers'"
 done
 [[ $threads =~ ^[0-9]+$ ]] || die "THREADS must be a non-negative integer, got '$threads'"
 
@@ -102,6 +104,7 @@ write_case() { # file nx ny solver
   case $4 in
     cholesky) solver_table='linear = "cholesky"' ;;
     pcg-schwarz) solver_table=$'linear = "pcg"\npreconditioner = "schwarz"\npcg_tol = 1e-8' ;;
+    mumps) solver_table='linear = "petsc"' ;;
     *) die "unknown solver $4" ;;
   esac
   cat >"$1" <<EOF
@@ -164,8 +167,15 @@ write_case "$tmp/probe.toml" 2 2 cholesky
 launch 2 "$tmp/probe.toml" "$tmp/probe" "$tmp/probe.log" || { tail -20 "$tmp/probe.log" >&2; die "the 2-rank probe run failed ($exe)"; }
 grep -q "2 MPI ranks" "$tmp/probe.log" || {
   head -5 "$tmp/probe.log" >&2
-  die "$exe is not an MPI build (2 ranks ran as 2 serial runs): build it with cargo build --release --features mpi, or set MPFEM"
+  die "$exe is not an MPI build (2 ranks ran as 2 serial runs): build it with cargo build --release --features petsc, or set MPFEM"
 }
+if [[ " $solvers " == *" mumps "* ]]; then
+  write_case "$tmp/probe-mumps.toml" 2 2 mumps
+  launch 2 "$tmp/probe-mumps.toml" "$tmp/probe-mumps" "$tmp/probe-mumps.log" || {
+    tail -5 "$tmp/probe-mumps.log" >&2
+    die "the mumps solver needs a build with PETSc (cargo build --release --features petsc after bash scripts/setup.sh), or leave it out: SOLVERS=\"cholesky pcg-schwarz\""
+  }
+fi
 
 csv=$outdir/scaling.csv
 runs_csv=$outdir/runs.csv

@@ -123,6 +123,8 @@ pub struct Case {
     pub loads: Vec<LoadSpec>,
     pub time: TimeSpec,
     pub solver: SolverSpec,
+    /// PETSc's options for `[solver] linear = "petsc"` (its command-line syntax; empty: none).
+    pub petsc_options: String,
     pub output: OutputSpec,
     /// Rigid walls (empty: no walls).
     pub walls: Vec<WallSpec>,

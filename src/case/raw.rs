@@ -357,6 +357,7 @@ pub struct Solver {
     pub ordering: Option<String>,
     pub pcg_tol: Option<f64>,
     pub pcg_max_iterations: Option<i64>,
+    pub petsc_options: Option<String>,
     pub threads: Option<i64>,
     pub incompressible_penalty: Option<f64>,
     pub volume_tol: Option<f64>,

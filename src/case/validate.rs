@@ -449,7 +449,25 @@ impl Cx<'_> {
                 ));
             }
         }
+        let petsc_options = r.solver.as_ref().and_then(|s| s.petsc_options.clone());
         let solver = self.solver(r.solver, contact.method == ContactMethod::Barrier)?;
+        let petsc = solver.linear == LinearChoice::Fixed(LinearSolverKind::Petsc);
+        if petsc && !cfg!(feature = "petsc") {
+            return Err(self.err("solver.linear", format!("value \"petsc\": {}; expected \"auto\", \"lu\", \"cholesky\" or \"pcg\"", crate::linalg::petsc::NOT_BUILT)));
+        }
+        let petsc_options = match petsc_options {
+            Some(o) if !petsc => return Err(self.err("solver.petsc_options", format!("value {o:?} with solver.linear other than \"petsc\"; expected solver.linear = \"petsc\" (PETSc reads these options) or no petsc_options"))),
+            Some(o) => {
+                if let Some(w) = o.split_whitespace().next().filter(|w| !w.starts_with('-')) {
+                    return Err(self.err("solver.petsc_options", format!("value {o:?}: {w:?} is not an option; expected PETSc's command-line options, each starting with '-' (\"-ksp_type cg -pc_type gamg\")")));
+                }
+                if o.contains('\0') {
+                    return Err(self.err("solver.petsc_options", "a NUL character; expected PETSc's command-line options"));
+                }
+                o
+            }
+            None => String::new(),
+        };
         if contact.method == ContactMethod::Lagrange {
             if let LinearChoice::Fixed(k) = solver.linear {
                 if k != LinearSolverKind::Lu {
@@ -483,6 +501,7 @@ impl Cx<'_> {
             loads,
             time,
             solver,
+            petsc_options,
             output,
             walls,
             contact,
@@ -1734,10 +1753,11 @@ impl Cx<'_> {
             s.line_search = v;
         }
         if let Some(v) = &r.linear {
-            s.linear = match self.choice("solver.linear", v, &["auto", "lu", "cholesky", "pcg"])? {
+            s.linear = match self.choice("solver.linear", v, &["auto", "lu", "cholesky", "pcg", "petsc"])? {
                 "auto" => LinearChoice::Auto,
                 "lu" => LinearChoice::Fixed(LinearSolverKind::Lu),
                 "cholesky" => LinearChoice::Fixed(LinearSolverKind::Cholesky),
+                "petsc" => LinearChoice::Fixed(LinearSolverKind::Petsc),
                 _ => LinearChoice::Fixed(LinearSolverKind::Pcg),
             };
         }

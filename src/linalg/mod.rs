@@ -9,6 +9,7 @@
 pub mod csr;
 pub mod direct;
 pub mod pcg;
+pub mod petsc;
 pub mod schwarz;
 
 pub use csr::{BlockMap, CsrMatrix, NO_ROW};
@@ -27,6 +28,9 @@ pub enum LinearSolverKind {
     Cholesky,
     /// Preconditioned conjugate gradients (symmetric positive definite matrices).
     Pcg,
+    /// PETSc's distributed solvers (feature `petsc`; [`petsc`]): MUMPS by default, any KSP
+    /// and PC through its options database.
+    Petsc,
 }
 
 /// The linear solver a run asks for (`[solver] linear`): a fixed kind, or `Auto`, which the
@@ -123,7 +127,8 @@ pub trait LinearSolver: Send {
     fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError>;
     /// Solve with the last factorisation. For PCG `x` is the initial guess on entry.
     fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError>;
-    fn name(&self) -> &'static str;
+    /// What solves: the method (and, for PETSc, the KSP, PC and factorisation package).
+    fn name(&self) -> &str;
     /// Whether the last factorisation found the matrix positive definite (a Cholesky
     /// factorisation that did not fall back to an indefinite one); None when the solver cannot
     /// tell (LU, iterative solvers).
@@ -197,6 +202,8 @@ pub fn make_solver_with(
         // run's path the same on any number of them
         LinearSolverKind::Lu => Box::new(direct::FaerLu::new(1).with_refinement(refinement)),
         LinearSolverKind::Cholesky => Box::new(direct::FaerCholesky::new(1).with_ordering(opts.ordering).with_refinement(refinement)),
+        // every row on rank 0 (a simulation gives the rows' owners: `petsc::make`)
+        LinearSolverKind::Petsc => petsc::make(None, opts.symmetric, opts.pcg_tol, opts.pcg_max_iterations, opts.singular_tol, comm.rank(), comm.size()),
         LinearSolverKind::Pcg => Box::new(pcg::Pcg::new(
             opts.preconditioner,
             opts.pcg_tol,

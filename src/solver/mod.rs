@@ -241,7 +241,9 @@ impl Simulation {
         // the particles are the subdomains of the Schwarz preconditioner, distributed like the
         // elements; with it every process takes part in the solve, otherwise rank 0 alone solves
         let schwarz = kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
-        let distributed_solve = par.is_some() && schwarz;
+        // (PETSc: every process solves its own rows)
+        let petsc = kind == LinearSolverKind::Petsc;
+        let distributed_solve = par.is_some() && (schwarz || petsc);
         let mut subdomains = crate::linalg::schwarz::Subdomains::default();
         if schwarz {
             let eq = &assembler.eq;
@@ -250,7 +252,27 @@ impl Simulation {
                 subdomains = subdomains.with_owners(&p.body_owner, comm.rank());
             }
         }
-        let mut linear = make_solver_with(&opts, subdomains, comm.clone());
+        let mut linear = if petsc {
+            // each row to its particle's owner (the multiplier rows to rank 0), with its dof's
+            // reference position and direction for the rigid-body modes
+            let n_rows = kk.nrows;
+            let mut layout = crate::linalg::petsc::RowLayout { owner: vec![0; n_rows], dof: vec![None; n_rows] };
+            for (b, body) in model.bodies.iter().enumerate() {
+                let owner = par.as_ref().map_or(0, |p| p.body_owner[b]);
+                for node in body.node_offset..body.node_offset + body.mesh.nodes.len() {
+                    for c in 0..2 {
+                        let q = assembler.eq[2 * node + c];
+                        if q != FIXED {
+                            layout.owner[q] = owner;
+                            layout.dof[q] = Some((model.x0[node], c));
+                        }
+                    }
+                }
+            }
+            crate::linalg::petsc::make(Some(layout), symmetric, spec.pcg_tol, spec.pcg_max_iterations, singular_tol, comm.rank(), comm.size())
+        } else {
+            make_solver_with(&opts, subdomains, comm.clone())
+        };
         // (a failure on the solving process fails every process)
         let analyzed = if n_free > 0 && (comm.is_root() || distributed_solve) { linear.analyze(&kk) } else { Ok(()) };
         if par.is_some() && comm.max(if analyzed.is_err() { 1.0 } else { 0.0 }) > 0.0 {

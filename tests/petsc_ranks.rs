@@ -1,0 +1,207 @@
+//! PETSc as the distributed linear solver (feature `petsc`, `[solver] linear = "petsc"`):
+//! `mpirun -n R mpfem run` with PETSc's solvers against the serial run with faer's.
+//!
+//! - MUMPS (the default): the 3 × 3 J2 discs with friction (an unsymmetric tangent: MUMPS's
+//!   LU) on 1, 2, 3 and 4 ranks, and the elastic frictionless discs with the barrier (a
+//!   symmetric tangent: MUMPS's LDLᵀ, whose inertia the barrier's descent asks for) on 2 and 3
+//!   ranks: the wall pressures and forces equal the serial faer run's to 1e-8 relative (of the
+//!   column's largest value), the tolerance for a direct distributed solve (measured:
+//!   1.4e-12 and below; the Newton tolerance of the cases, 1e-11, is far below it).
+//! - A checkpoint of a 2-rank PETSc run continues on 3 ranks to the uninterrupted serial faer
+//!   history (1e-8).
+//! - CG + GAMG (`petsc_options = "-pc_type gamg"`: CG, as the tangent is symmetric, with the
+//!   rigid-body modes as GAMG's near-null space) on Cook's membrane (48 × 48 elements, linear
+//!   regime) on 2 ranks: the corner's displacement equals faer's Cholesky to 1e-7 relative (the
+//!   CG tolerance is 1e-10 of the residual, and κ of this mesh is about 1e5; measured 1e-12).
+//! - An iterative solve that cannot converge fails the run cleanly (exit 1, the reason named,
+//!   every rank ended), never a panic or a hang.
+//!
+//! Needs Open MPI's `mpirun` and PETSc (`scripts/setup.sh` installs both). The test binary
+//! never starts MPI itself; its tests start `mpirun`.
+#![cfg(feature = "petsc")]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+mod common;
+use common::tmpdir;
+
+const CASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3.toml");
+const CASE_ELASTIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3_pcg.toml");
+const COOK: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/jobs/verification/cook_membrane.toml");
+const TOL: f64 = 1e-8;
+const COMPARED: [&str; 9] = ["solid_ratio", "p_left", "p_right", "p_bottom", "p_top", "f_left", "f_right", "f_bottom", "f_top"];
+
+/// `mpirun -n ranks mpfem` as root in a container (see tests/mpi_ranks.rs).
+fn mpirun(ranks: usize) -> Command {
+    let mut c = Command::new("mpirun");
+    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
+    c.args(["--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string(), env!("CARGO_BIN_EXE_mpfem")]);
+    c
+}
+
+/// `mpfem run case --out out` serially (no launcher) or on `ranks` ranks, with `extra`
+/// arguments; its output.
+fn run(case: &Path, ranks: Option<usize>, out: &Path, extra: &[&str]) -> Output {
+    let mut cmd = match ranks {
+        None => Command::new(env!("CARGO_BIN_EXE_mpfem")),
+        Some(n) => mpirun(n),
+    };
+    cmd.arg("run").arg(case).arg("--out").arg(out).args(["--quiet", "--no-plots", "--threads", "1"]).args(extra);
+    cmd.output().unwrap_or_else(|e| panic!("cannot start {:?} (bash scripts/setup.sh installs Open MPI): {e}", cmd.get_program()))
+}
+
+fn run_ok(case: &Path, ranks: Option<usize>, out: &Path) {
+    let o = run(case, ranks, out, &[]);
+    assert!(o.status.success(), "{ranks:?} ranks, {}: {:?}\nstderr: {}", case.display(), o.status, String::from_utf8_lossy(&o.stderr));
+}
+
+/// A copy of `case` in `dir` with `edit` applied (which must change it).
+fn variant(dir: &Path, name: &str, case: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(case).expect("case");
+    let new = edit(&text);
+    assert_ne!(new, text, "{name}: the edit changed nothing (the case moved?)");
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, new).expect("write case");
+    p
+}
+
+/// The case's `[solver]` table with `lines` added at its top.
+fn with_solver(text: &str, lines: &str) -> String {
+    text.replacen("[solver]\n", &format!("[solver]\n{lines}\n"), 1)
+}
+
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header = lines.next().expect("header").split(',').map(str::to_string).collect();
+    let rows = lines.map(|l| l.split(',').map(|v| v.trim().parse::<f64>().expect("number")).collect()).collect();
+    (header, rows)
+}
+
+/// The largest difference of the compared columns from the reference, relative to each
+/// column's largest |value|; asserts the same columns and steps.
+fn worst_difference(reference: &Path, other: &Path, what: &str) -> f64 {
+    let (h0, r0) = read_csv(&reference.join("history.csv"));
+    let (h1, r1) = read_csv(&other.join("history.csv"));
+    assert_eq!(h0, h1, "{what}: columns");
+    assert_eq!(r0.len(), r1.len(), "{what}: {} steps, the reference {}", r1.len(), r0.len());
+    let col = |n: &str| h0.iter().position(|h| h == n).unwrap_or_else(|| panic!("no column {n}"));
+    assert!(r0.len() >= 3, "{what}: only {} steps", r0.len());
+    assert!(r0.last().unwrap()[col("p_left")] > 1.0, "{what}: the left wall carries no pressure");
+    let mut worst = 0.0f64;
+    for name in COMPARED {
+        let c = col(name);
+        let scale = r0.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        for (a, b) in r1.iter().zip(&r0) {
+            assert_eq!(a[col("step")], b[col("step")], "{what}: step numbers");
+            worst = worst.max((a[c] - b[c]).abs() / scale);
+        }
+    }
+    worst
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary.json")).expect("summary.json parses")
+}
+
+#[test]
+fn mumps_on_1_to_4_ranks_matches_the_serial_faer_run() {
+    let dir = tmpdir("mumps");
+    // J2 with friction and the penalty method: LU
+    let serial = dir.join("serial");
+    run_ok(Path::new(CASE), None, &serial);
+    let case = variant(&dir, "petsc", CASE, |t| with_solver(t, "linear = \"petsc\""));
+    for ranks in 1..=4 {
+        let out = dir.join(format!("lu{ranks}"));
+        run_ok(&case, Some(ranks), &out);
+        let solver = summary(&out)["run"]["linear_solver"].as_str().unwrap_or_default().to_string();
+        assert_eq!(solver, "petsc preonly+lu (mumps)", "{ranks} ranks");
+        let worst = worst_difference(&serial, &out, &format!("MUMPS LU on {ranks} ranks"));
+        println!("MUMPS LU on {ranks} rank(s): largest relative difference from the serial faer run {worst:.2e}");
+        assert!(worst <= TOL, "MUMPS LU on {ranks} ranks: {worst:.2e} > {TOL:e}");
+    }
+    // elastic, frictionless, the barrier: a symmetric tangent, MUMPS's LDLᵀ and its inertia
+    let barrier = variant(&dir, "barrier", CASE_ELASTIC, |t| t.replace("method = \"penalty\"", "method = \"barrier\"").replace("linear = \"pcg\"\npreconditioner = \"schwarz\"\n", ""));
+    let serial = dir.join("barrier-serial");
+    run_ok(&barrier, None, &serial);
+    assert_eq!(summary(&serial)["run"]["linear_solver"].as_str(), Some("cholesky"));
+    let case = variant(&dir, "barrier-petsc", barrier.to_str().unwrap(), |t| with_solver(t, "linear = \"petsc\""));
+    for ranks in [2, 3] {
+        let out = dir.join(format!("ldlt{ranks}"));
+        run_ok(&case, Some(ranks), &out);
+        assert_eq!(summary(&out)["run"]["linear_solver"].as_str(), Some("petsc preonly+cholesky (mumps)"));
+        let worst = worst_difference(&serial, &out, &format!("MUMPS LDLT on {ranks} ranks"));
+        println!("MUMPS LDLT (barrier) on {ranks} ranks: largest relative difference from the serial faer run {worst:.2e}");
+        assert!(worst <= TOL, "MUMPS LDLT on {ranks} ranks: {worst:.2e} > {TOL:e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_petsc_checkpoint_continues_on_another_rank_count() {
+    let dir = tmpdir("restart");
+    let serial = dir.join("serial");
+    run_ok(Path::new(CASE), None, &serial);
+    let case = variant(&dir, "petsc", CASE, |t| with_solver(t, "linear = \"petsc\"").replace("[output]\nevery = 0", "[output]\nevery = 0\ncheckpoint_every = 4\ncheckpoint_minutes = 0"));
+    let two = dir.join("two");
+    run_ok(&case, Some(2), &two);
+    let three = dir.join("three");
+    std::fs::create_dir_all(&three).unwrap();
+    for f in ["history.csv", "checkpoint.h5"] {
+        std::fs::copy(two.join(f), three.join(f)).unwrap();
+    }
+    // the checkpoint is at step 4, before the end: cut the history back to it as a stopped
+    // run would have left it
+    let h = std::fs::read_to_string(three.join("history.csv")).unwrap();
+    let kept: Vec<&str> = h.lines().take(5).collect();
+    assert!(h.lines().count() > 5, "the run has only {} steps", h.lines().count() - 1);
+    std::fs::write(three.join("history.csv"), kept.join("\n") + "\n").unwrap();
+    let o = run(&case, Some(3), &three, &["--restart", three.to_str().unwrap()]);
+    assert!(o.status.success(), "restart on 3 ranks: {}", String::from_utf8_lossy(&o.stderr));
+    let worst = worst_difference(&serial, &three, "restarted on 3 ranks");
+    println!("checkpoint of 2 ranks continued on 3: largest relative difference from the serial faer run {worst:.2e}");
+    assert!(worst <= TOL, "restart on 3 ranks: {worst:.2e} > {TOL:e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The displacement of Cook's membrane's corner from `probes.csv`.
+fn corner_uy(dir: &Path) -> f64 {
+    let (h, rows) = read_csv(&dir.join("probes.csv"));
+    let c = h.iter().position(|n| n == "corner_uy").expect("corner_uy");
+    rows.last().expect("a row")[c]
+}
+
+#[test]
+fn cg_with_gamg_matches_the_direct_solve() {
+    let dir = tmpdir("gamg");
+    let probes = "\n[output]\nprobes = [{ name = \"corner\", point = [48.0, 60.0] }]\n";
+    let direct = variant(&dir, "cook", COOK, |t| t.replace("divisions = [16, 16]", "divisions = [48, 48]") + probes);
+    let gamg = variant(&dir, "cook-gamg", direct.to_str().unwrap(), |t| with_solver(t, "linear = \"petsc\"\npetsc_options = \"-pc_type gamg\"\npcg_tol = 1e-10"));
+    let reference = dir.join("faer");
+    run_ok(&direct, None, &reference);
+    let out = dir.join("gamg");
+    run_ok(&gamg, Some(2), &out);
+    assert_eq!(summary(&out)["run"]["linear_solver"].as_str(), Some("petsc cg+gamg"));
+    let (a, b) = (corner_uy(&out), corner_uy(&reference));
+    assert!(b.abs() > 1e-6, "the corner does not move: {b}");
+    let rel = (a - b).abs() / b.abs();
+    println!("CG + GAMG on 2 ranks: corner u_y {a:.12e} against faer's {b:.12e} (relative {rel:.1e})");
+    assert!(rel <= 1e-7, "CG + GAMG: corner u_y {a} vs {b} (relative {rel:.1e})");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_iterative_solve_that_cannot_converge_fails_the_run_cleanly() {
+    let dir = tmpdir("fail");
+    let case = variant(&dir, "cg2", CASE, |t| with_solver(t, "linear = \"petsc\"\npetsc_options = \"-ksp_type cg -pc_type jacobi -ksp_max_it 2\""));
+    let out = dir.join("out");
+    let o = run(&case, Some(2), &out, &[]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("did not converge"), "the reason is not named: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // what converged before is kept
+    assert!(out.join("summary.json").is_file(), "no summary.json");
+    let _ = std::fs::remove_dir_all(&dir);
+}
