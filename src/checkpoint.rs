@@ -21,6 +21,14 @@
 //!   last step's report);
 //! - `run` (u8): CBOR of the caller's record ([`Checkpoint::run_state`]).
 //!
+//! Since format version 2 every dataset carries an attribute `sha256`, the SHA-256 of its
+//! values as little-endian bytes in storage order, and the root an attribute `header_sha256`
+//! over the other root attributes (`format_version|mpfem_version|case_sha256|step|time bits`,
+//! time as the hexadecimal of its IEEE bits). A restart checks every one, and the meshes'
+//! node numbers against their node counts, before anything of the checkpoint is used: a
+//! changed or damaged file is refused (exit 2) naming the dataset, never restarted into a
+//! different run. Version 1 files (no checksums) are still read, with a warning.
+//!
 //! The file is written as `checkpoint.h5.tmp`, flushed and synced to disk, then renamed over
 //! `checkpoint.h5`: a run killed while it writes leaves the previous checkpoint intact.
 
@@ -37,7 +45,9 @@ use thiserror::Error;
 /// Name of the checkpoint file in a run's output directory.
 pub const FILE_NAME: &str = "checkpoint.h5";
 /// Version of the layout; a checkpoint of another version is refused.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
+/// The oldest layout still read (without checksums to verify).
+const OLDEST_VERSION: u32 = 1;
 
 /// What can go wrong with a checkpoint.
 #[derive(Debug, Error)]
@@ -74,6 +84,34 @@ fn cbor<T: Serialize>(v: &T) -> Result<Vec<u8>, String> {
     let mut buf = Vec::new();
     ciborium::into_writer(v, &mut buf).map_err(|e| e.to_string())?;
     Ok(buf)
+}
+
+/// The SHA-256, in hexadecimal, of values as little-endian bytes in their order.
+fn digest<T: Copy, const W: usize>(v: &[T], bytes: impl Fn(T) -> [u8; W]) -> String {
+    use sha2::Digest;
+    let mut h = sha2::Sha256::new();
+    for &x in v {
+        h.update(bytes(x));
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn digest_f64(v: &[f64]) -> String {
+    digest(v, f64::to_le_bytes)
+}
+
+fn digest_u64(v: &[u64]) -> String {
+    digest(v, u64::to_le_bytes)
+}
+
+fn digest_u8(v: &[u8]) -> String {
+    digest(v, |b: u8| [b])
+}
+
+/// The checksum of the root attributes other than itself.
+fn header_digest(version: u32, mpfem_version: &str, case_sha256: &str, step: u64, time: f64) -> String {
+    let text = format!("{version}|{mpfem_version}|{case_sha256}|{step}|{:016x}", time.to_bits());
+    digest_u8(text.as_bytes())
 }
 
 fn flat_usize<const N: usize>(v: &[[usize; N]]) -> Vec<u64> {
@@ -113,33 +151,54 @@ pub fn write<T: Serialize>(dir: &Path, sim: &Simulation, case_sha256: &str, run:
 fn write_h5(f: &hdf5::File, sim: &Simulation, st: &SimState, case_sha256: &str, scalars: &[u8], run: &[u8]) -> hdf5::Result<()> {
     use hdf5::types::VarLenUnicode;
     let text = |s: &str| -> hdf5::Result<VarLenUnicode> { s.parse().map_err(|e| hdf5::Error::from(format!("{e}"))) };
+    let step = st.scalars.run.step as u64;
     f.new_attr::<u32>().create("format_version")?.write_scalar(&FORMAT_VERSION)?;
     f.new_attr::<VarLenUnicode>().create("mpfem_version")?.write_scalar(&text(env!("CARGO_PKG_VERSION"))?)?;
     f.new_attr::<VarLenUnicode>().create("case_sha256")?.write_scalar(&text(case_sha256)?)?;
-    f.new_attr::<u64>().create("step")?.write_scalar(&(st.scalars.run.step as u64))?;
+    f.new_attr::<u64>().create("step")?.write_scalar(&step)?;
     f.new_attr::<f64>().create("time")?.write_scalar(&st.scalars.time)?;
-    f.new_dataset::<u8>().shape(scalars.len()).create("scalars")?.write_raw(scalars)?;
-    f.new_dataset::<u8>().shape(run.len()).create("run")?.write_raw(run)?;
+    let header = header_digest(FORMAT_VERSION, env!("CARGO_PKG_VERSION"), case_sha256, step, st.scalars.time);
+    f.new_attr::<VarLenUnicode>().create("header_sha256")?.write_scalar(&text(&header)?)?;
+    // every dataset with the checksum of its values
+    let sum = |d: &hdf5::Dataset, hex: String| -> hdf5::Result<()> { d.new_attr::<VarLenUnicode>().create("sha256")?.write_scalar(&text(&hex)?) };
+    let put_u8 = |g: &hdf5::Group, name: &str, v: &[u8]| -> hdf5::Result<()> {
+        let d = g.new_dataset::<u8>().shape(v.len()).create(name)?;
+        d.write_raw(v)?;
+        sum(&d, digest_u8(v))
+    };
+    let put_f64 = |g: &hdf5::Group, name: &str, shape: Vec<usize>, v: &[f64]| -> hdf5::Result<()> {
+        let d = g.new_dataset::<f64>().shape(shape).create(name)?;
+        d.write_raw(v)?;
+        sum(&d, digest_f64(v))
+    };
+    let put_u64 = |g: &hdf5::Group, name: &str, shape: Vec<usize>, v: &[u64]| -> hdf5::Result<()> {
+        let d = g.new_dataset::<u64>().shape(shape).create(name)?;
+        d.write_raw(v)?;
+        sum(&d, digest_u64(v))
+    };
+    let root = f.group("/")?;
+    put_u8(&root, "scalars", scalars)?;
+    put_u8(&root, "run", run)?;
 
     let sol = &st.sol;
     let ne = sol.lambda.len();
     let g = f.create_group("solution")?;
-    g.new_dataset::<f64>().shape(sol.u.len()).create("u")?.write_raw(&sol.u)?;
-    g.new_dataset::<f64>().shape(st.u_prev.len()).create("u_prev")?.write_raw(&st.u_prev)?;
+    put_f64(&g, "u", vec![sol.u.len()], &sol.u)?;
+    put_f64(&g, "u_prev", vec![st.u_prev.len()], &st.u_prev)?;
     for (name, v) in [("lambda", &sol.lambda), ("j0", &sol.j0), ("pressure", &sol.fields.pressure), ("theta", &sol.fields.theta)] {
-        g.new_dataset::<f64>().shape(v.len()).create(name)?.write_raw(v)?;
+        put_f64(&g, name, vec![v.len()], v)?;
     }
     let states: Vec<f64> = sol.fields.states.iter().flat_map(|gp| gp.iter().flat_map(|q| [q.cp_inv[0], q.cp_inv[1], q.cp_inv[2], q.cp_inv[3], q.eps_p, q.eps_c])).collect();
-    g.new_dataset::<f64>().shape((ne, 4, 6)).create("states")?.write_raw(&states)?;
+    put_f64(&g, "states", vec![ne, 4, 6], &states)?;
     let sig: Vec<f64> = sol.fields.sig.iter().flat_map(|gp| gp.iter().flatten().copied()).collect();
-    g.new_dataset::<f64>().shape((ne, 4, 4)).create("sig")?.write_raw(&sig)?;
+    put_f64(&g, "sig", vec![ne, 4, 4], &sig)?;
     let n_enh = sol.fields.alpha.first().map_or(0, |a| a.len());
     let alpha: Vec<f64> = sol.fields.alpha.iter().flatten().copied().collect();
-    g.new_dataset::<f64>().shape((ne, n_enh)).create("alpha")?.write_raw(&alpha)?;
+    put_f64(&g, "alpha", vec![ne, n_enh], &alpha)?;
     if let Some(dy) = &st.dynamics {
         let g = f.create_group("dynamics")?;
         for (name, v) in ["u", "v", "a", "g"].iter().zip(dy) {
-            g.new_dataset::<f64>().shape(v.len()).create(*name)?.write_raw(v)?;
+            put_f64(&g, name, vec![v.len()], v)?;
         }
     }
     let meshes = f.create_group("meshes")?;
@@ -148,12 +207,12 @@ fn write_h5(f: &hdf5::File, sim: &Simulation, st: &SimState, case_sha256: &str, 
         let g = meshes.create_group(&format!("{b:06}"))?;
         g.new_attr::<VarLenUnicode>().create("name")?.write_scalar(&text(&body.name)?)?;
         let nodes: Vec<f64> = m.nodes.iter().flatten().copied().collect();
-        g.new_dataset::<f64>().shape((m.nodes.len(), 2)).create("nodes")?.write_raw(&nodes)?;
-        g.new_dataset::<u64>().shape((m.elements.len(), 4)).create("elements")?.write_raw(&flat_usize(&m.elements))?;
-        g.new_dataset::<u64>().shape((m.boundary.len(), 2)).create("boundary")?.write_raw(&flat_usize(&m.boundary))?;
+        put_f64(&g, "nodes", vec![m.nodes.len(), 2], &nodes)?;
+        put_u64(&g, "elements", vec![m.elements.len(), 4], &flat_usize(&m.elements))?;
+        put_u64(&g, "boundary", vec![m.boundary.len(), 2], &flat_usize(&m.boundary))?;
         let sets = g.create_group("edge_sets")?;
         for (name, edges) in &m.edge_sets {
-            sets.new_dataset::<u64>().shape((edges.len(), 2)).create(name.as_str())?.write_raw(&flat_usize(edges))?;
+            put_u64(&sets, name.as_str(), vec![edges.len(), 2], &flat_usize(edges))?;
         }
     }
     Ok(())
@@ -199,19 +258,57 @@ impl Checkpoint {
             move |err| format!("{what}: {err}")
         }
         let version: u32 = f.attr("format_version").and_then(|a| a.read_scalar()).map_err(e("format_version"))?;
-        if version != FORMAT_VERSION {
-            return Err(format!("format version {version}; this mpfem reads version {FORMAT_VERSION}"));
+        if !(OLDEST_VERSION..=FORMAT_VERSION).contains(&version) {
+            return Err(format!("format version {version}; this mpfem reads versions {OLDEST_VERSION} to {FORMAT_VERSION}"));
+        }
+        let verified = version >= 2;
+        if !verified {
+            tracing::warn!(path = %path.display(), version, "an old checkpoint without checksums: its contents cannot be verified");
         }
         let string = |name: &str| -> Result<String, String> { f.attr(name).and_then(|a| a.read_scalar::<VarLenUnicode>()).map(|s| s.as_str().to_string()).map_err(e(name)) };
         let mpfem_version = string("mpfem_version")?;
         let case_sha256 = string("case_sha256")?;
         let step: u64 = f.attr("step").and_then(|a| a.read_scalar()).map_err(e("step"))?;
         let time: f64 = f.attr("time").and_then(|a| a.read_scalar()).map_err(e("time"))?;
-        let bytes = |name: &str| -> Result<Vec<u8>, String> { f.dataset(name).and_then(|d| d.read_raw::<u8>()).map_err(e(name)) };
+        const CHANGED: &str = "checksum mismatch: the file was changed or damaged after it was written";
+        if verified && string("header_sha256")? != header_digest(version, &mpfem_version, &case_sha256, step, time) {
+            return Err(format!("the root attributes (format_version, mpfem_version, case_sha256, step, time): {CHANGED}"));
+        }
+        // a dataset's values, checked against its checksum (version 2 on)
+        let checked = |name: &str, d: &hdf5::Dataset, actual: String| -> Result<(), String> {
+            if !verified {
+                return Ok(());
+            }
+            let stored = d.attr("sha256").and_then(|a| a.read_scalar::<VarLenUnicode>()).map_err(|err| format!("{name}: no checksum ({err})"))?;
+            if stored.as_str() == actual {
+                Ok(())
+            } else {
+                Err(format!("{name}: {CHANGED}"))
+            }
+        };
+        let bytes = |name: &str| -> Result<Vec<u8>, String> {
+            let d = f.dataset(name).map_err(e(name))?;
+            let v = d.read_raw::<u8>().map_err(e(name))?;
+            checked(name, &d, digest_u8(&v))?;
+            Ok(v)
+        };
+        let f64s = |name: &str| -> Result<Vec<f64>, String> {
+            let d = f.dataset(name).map_err(e(name))?;
+            let v = d.read_raw::<f64>().map_err(e(name))?;
+            checked(name, &d, digest_f64(&v))?;
+            Ok(v)
+        };
+        let u64s = |name: &str| -> Result<Vec<u64>, String> {
+            let d = f.dataset(name).map_err(e(name))?;
+            let v = d.read_raw::<u64>().map_err(e(name))?;
+            checked(name, &d, digest_u64(&v))?;
+            Ok(v)
+        };
+        if !time.is_finite() || time < 0.0 {
+            return Err(format!("time: {time}; expected a finite time ≥ 0"));
+        }
         let scalars: SimScalars = ciborium::from_reader(bytes("scalars")?.as_slice()).map_err(|err| format!("scalars: {err}"))?;
         let run = bytes("run")?;
-        let f64s = |name: &str| -> Result<Vec<f64>, String> { f.dataset(name).and_then(|d| d.read_raw::<f64>()).map_err(e(name)) };
-        let u64s = |name: &str| -> Result<Vec<u64>, String> { f.dataset(name).and_then(|d| d.read_raw::<u64>()).map_err(e(name)) };
 
         let u = f64s("solution/u")?;
         let u_prev = f64s("solution/u_prev")?;
@@ -266,12 +363,30 @@ impl Checkpoint {
             for s in sets.member_names().map_err(e(&p))? {
                 edge_sets.insert(s.clone(), pairs::<2>(u64s(&format!("{p}/edge_sets/{s}"))?, &s)?);
             }
-            meshes.push(Mesh {
+            let mesh = Mesh {
                 nodes: nodes.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
                 elements: pairs::<4>(u64s(&format!("{p}/elements"))?, &p)?,
                 boundary: pairs::<2>(u64s(&format!("{p}/boundary"))?, &p)?,
                 edge_sets,
-            });
+            };
+            // node numbers within the mesh, coordinates finite: nothing later indexes out of it
+            let n = mesh.nodes.len();
+            if let Some(k) = mesh.nodes.iter().position(|q| !q[0].is_finite() || !q[1].is_finite()) {
+                return Err(format!("{p}/nodes: node {k} has coordinates {:?}", mesh.nodes[k]));
+            }
+            let bad = |what: &str, list: &[usize]| list.iter().find(|&&v| v >= n).map(|v| format!("{p}/{what}: node {v} of a mesh of {n} nodes"));
+            if let Some(m) = bad("elements", mesh.elements.as_flattened()) {
+                return Err(m);
+            }
+            if let Some(m) = bad("boundary", mesh.boundary.as_flattened()) {
+                return Err(m);
+            }
+            for (s, edges) in &mesh.edge_sets {
+                if let Some(m) = bad(&format!("edge_sets/{s}"), edges.as_flattened()) {
+                    return Err(m);
+                }
+            }
+            meshes.push(mesh);
         }
         let sol = Solution { time: scalars.time, u, fields, lambda, j0 };
         Ok(Self {

@@ -505,8 +505,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
     };
     let formulation = format!("{:?}", c.formulation);
-    let n_nodes = model.n_nodes();
-    let n_elements = model.elements.len();
     let n_bodies = model.bodies.len();
     let title = c.title.clone();
     let started = Instant::now();
@@ -565,7 +563,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         _ => format!(", {ranks} MPI ranks (solve on rank 0)"),
     };
     let start = format!(
-        "{label}: \"{title}\" — {n_bodies} body(ies), {n_elements} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
+        "{label}: \"{title}\" — {n_bodies} body(ies), {} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
+        sim.model.elements.len(),
         sim.n_free(),
         sim.linear_solver_name(),
         c.time.end
@@ -717,8 +716,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         error,
         formulation,
         n_bodies,
-        n_nodes,
-        n_elements,
+        // the meshes the run ended on: a restart's (its re-meshed particles come from the
+        // checkpoint, whatever the case says) and every re-mesh's
+        n_nodes: sim.model.n_nodes(),
+        n_elements: sim.model.elements.len(),
         wall_time_s,
         final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
         phases: Phases::split(&sim.timing(), output_s, wall_time_s),
