@@ -421,8 +421,9 @@ impl Reporter for Console {
 }
 
 /// SIGTERM (Slurm's pre-emption and time-limit signal) and SIGINT (Ctrl-C) set a flag that the
-/// run reads after each converged step: it then writes a checkpoint, closes its results and
-/// exits with code 3. A second signal at least [`SECOND_SIGNAL_AFTER_MS`] after the first ends
+/// run reads before every Newton iteration and after each converged step: it then abandons the
+/// step under way, writes a checkpoint of the last converged one, closes its results and exits
+/// with code 3. A second signal at least [`SECOND_SIGNAL_AFTER_MS`] after the first ends
 /// the process at once (exit code 130); one sooner is the same request delivered twice:
 /// `timeout` sends its signal to the command and then to the command's whole process group,
 /// and a batch system may signal the job's shell and every process in it. Measured: a

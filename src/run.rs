@@ -604,6 +604,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     // (after a restart: the checkpoint's last step, so that a run restarted at its end still
     // writes its last step and final state)
     let mut last_report: Option<StepReport> = sim.last_report().cloned();
+    // a signal abandons the step under way within one Newton iteration (every rank looks at
+    // rank 0's flag there; without one, a flag nobody sets, so that all ranks check alike)
+    let stop_flag = opts.stop.clone().unwrap_or_default();
+    sim.set_interrupt(Arc::clone(&stop_flag));
     let mut result = sim.run_controlled(&mut |s, r| {
         last_report = Some(r.clone());
         max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
@@ -683,6 +687,26 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     });
     if let Ok(s) = result.as_mut() {
         s.wall_time_s += wall_before;
+        if s.interrupted && s.stop_reason.starts_with("interrupted during a step") {
+            // the signal came during a step, which was abandoned: the checkpoint of the last
+            // converged state, which the observer did not see with the signal
+            let signal = stop_flag.load(Ordering::SeqCst);
+            s.stop_reason = format!("interrupted by {} (the step under way abandoned)", signal_name(signal));
+            let t0 = Instant::now();
+            let state = RunState { phi0, max_body_volume_error, curve: curve.clone(), wall_time_s: wall_before + started.elapsed().as_secs_f64(), history_s, restarts: restarts.clone() };
+            match crate::checkpoint::write(out, &sim, &sha, &state) {
+                Ok(p) => {
+                    reporter.note(Note::Info, &format!("checkpoint at step {}, t = {} s: {}", s.steps, seconds(s.final_time), p.display()));
+                    ckpt_written = Some(s.steps);
+                    ckpt_failed = false;
+                }
+                Err(e) => {
+                    reporter.note(Note::Warning, &e.to_string());
+                    ckpt_failed = true;
+                }
+            }
+            ckpt_s += t0.elapsed().as_secs_f64();
+        }
     }
     if !opts.quiet {
         reporter.steps_end();
@@ -815,6 +839,8 @@ fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>)
             Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
         },
     };
+    // (rank 0's flag decides, also within a step: this one is never set)
+    sim.set_interrupt(Arc::default());
     let result = sim.run_controlled(&mut |_, _| {
         let mut stop = [0.0];
         comm.broadcast(&mut stop);

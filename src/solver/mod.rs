@@ -88,6 +88,10 @@ pub enum NewtonFailure {
     /// An iterate the contact cannot take (the barrier: boundaries touching).
     #[error("contact: {0}")]
     Contact(String),
+    /// A stop was asked for ([`Simulation::set_interrupt`]) during the iterations: the step is
+    /// abandoned.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// A run that could not go on.
@@ -146,6 +150,8 @@ pub struct Simulation {
     dynamics: Option<Dynamics>,
     /// Wall time per phase.
     clock: Clock,
+    /// The stop flag looked at before every Newton iteration ([`Simulation::set_interrupt`]).
+    interrupt: Option<Arc<std::sync::atomic::AtomicUsize>>,
 }
 
 impl Simulation {
@@ -369,6 +375,7 @@ impl Simulation {
             springs,
             dynamics,
             clock: Clock::default(),
+            interrupt: None,
         };
         sim.start_dynamics()?;
         Ok(sim)
@@ -601,5 +608,32 @@ impl Simulation {
     /// The run's phase timers (a caller may time its own phases, e.g. the output).
     pub fn clock(&self) -> &Clock {
         &self.clock
+    }
+}
+
+impl Simulation {
+    /// Look at `flag` before every Newton iteration: when it is not zero the step under way
+    /// is abandoned at once (the last converged state kept, as after a failed attempt) and
+    /// [`Simulation::run_controlled`] returns with `interrupted` set, without calling its
+    /// observer for that step. So a stop asked for by a signal takes effect within one Newton
+    /// iteration, not at the end of a step that may be cutting back for minutes. On several
+    /// processes every process must set a flag (rank 0's decides: it is broadcast at every
+    /// check, so that all abandon the same iteration).
+    pub fn set_interrupt(&mut self, flag: Arc<std::sync::atomic::AtomicUsize>) {
+        self.interrupt = Some(flag);
+    }
+
+    /// Whether a stop was asked for (rank 0's flag, on every process).
+    pub(super) fn check_interrupt(&self) -> Result<(), NewtonFailure> {
+        let Some(flag) = &self.interrupt else { return Ok(()) };
+        let mut asked = [flag.load(std::sync::atomic::Ordering::SeqCst) as f64];
+        if self.sys.par.is_some() {
+            self.sys.comm.broadcast(&mut asked);
+        }
+        if asked[0] != 0.0 {
+            Err(NewtonFailure::Interrupted)
+        } else {
+            Ok(())
+        }
     }
 }

@@ -260,6 +260,8 @@ impl Simulation {
         // how many updates in a row the collision-free step has cut below half
         let mut limited = 0;
         for k in 0..=max_iterations {
+            // a stop asked for (a signal) abandons the step here, within one iteration
+            self.check_interrupt()?;
             let reference = self.reference_force();
             let rel = rnorm / reference;
             residuals.push(rel);

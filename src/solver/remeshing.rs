@@ -88,6 +88,7 @@ impl Simulation {
         // the owners are kept unless the new element counts unbalance them too much
         let owners = self.sys.par.as_ref().map(|p| p.body_owner.as_slice());
         let mut next = Simulation::build(model, self.time, self.spec, self.sys.comm.clone(), Some((owners, &self.sys.partition)))?;
+        next.interrupt = self.interrupt.clone();
         // the solution: other bodies renumbered, the re-meshed body from the transfer
         for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
             if c == b {

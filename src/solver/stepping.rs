@@ -39,6 +39,11 @@ impl Simulation {
             let dt_try = self.land_on_target(if remaining <= dt * 1.01 { remaining } else { dt });
             let report = match self.advance(dt_try) {
                 Ok(r) => r,
+                Err(SolveError::StepFailed { cause: NewtonFailure::Interrupted, .. }) => {
+                    stop_reason = "interrupted during a step (abandoned)".to_string();
+                    interrupted = true;
+                    break;
+                }
                 Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && self.is_jammed(self.run.last_report.as_ref()) => {
                     tracing::warn!(time, dt, %cause, "the walls cannot advance any more: jammed");
                     stop_reason = "jammed".to_string();
@@ -167,6 +172,8 @@ impl Simulation {
         let mut remesh_tried = false;
         // whether the step starts descending on the potential (after a step that needed it)
         let sticky = self.barrier.as_ref().is_some_and(|b| b.descent);
+        // (what an abandoned step puts back: the springs' retry switches, the cut-back count)
+        let (springs0, cutbacks0) = ((self.springs.all, self.springs.viscous), self.run.total_cutbacks);
         loop {
             if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
                 c.restore(snap.clone());
@@ -195,6 +202,20 @@ impl Simulation {
                 }
             }
             let descent_retry = self.barrier.as_ref().is_some_and(|b| !b.descent) && !matches!(result, Err(NewtonFailure::Element(_)));
+            if let Err(NewtonFailure::Interrupted) = result {
+                // abandoned: the last converged state as the step found it (the contact
+                // histories, the descent's switch), to be checkpointed
+                if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot) {
+                    c.restore(snap);
+                }
+                if let Some(b) = self.barrier.as_mut() {
+                    b.descent = sticky;
+                }
+                (self.springs.all, self.springs.viscous) = springs0;
+                self.run.total_cutbacks = cutbacks0;
+                tracing::info!(time = self.sol.time, dt = dt_try, "step abandoned: a stop was asked for");
+                return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause: NewtonFailure::Interrupted });
+            }
             match result {
                 Ok(trial) => {
                     self.springs.all = false;
