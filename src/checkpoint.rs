@@ -21,7 +21,10 @@
 //!   last step's report);
 //! - `run` (u8): CBOR of the caller's record ([`Checkpoint::run_state`]).
 //!
-//! Since format version 2 every dataset carries an attribute `sha256`, the SHA-256 of its
+//! Since format version 2 the file starts with a 512-byte user block (which HDF5 skips) holding
+//! `mpfem checkpoint sha256 ` and the SHA-256 of every byte after the block: a restart checks
+//! it before HDF5 reads anything (HDF5 may crash on a damaged file rather than report it).
+//! Every dataset carries an attribute `sha256`, the SHA-256 of its
 //! values as little-endian bytes in storage order, and the root an attribute `header_sha256`
 //! over the other root attributes (`format_version|mpfem_version|case_sha256|step|time bits`,
 //! time as the hexadecimal of its IEEE bits). A restart checks every one, and the meshes'
@@ -48,6 +51,52 @@ pub const FILE_NAME: &str = "checkpoint.h5";
 pub const FORMAT_VERSION: u32 = 2;
 /// The oldest layout still read (without checksums to verify).
 const OLDEST_VERSION: u32 = 1;
+/// The user block at the start of a checkpoint (format 2 on), which HDF5 does not read: it
+/// holds [`SEAL`] and the SHA-256 of every byte after it, checked before HDF5 opens the file
+/// (HDF5 itself may crash on a damaged file rather than report it).
+const USERBLOCK: u64 = 512;
+const SEAL: &[u8] = b"mpfem checkpoint sha256 ";
+
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Write the whole-file checksum of the checkpoint at `path` (made with a [`USERBLOCK`]) into
+/// its user block: [`SEAL`], the SHA-256 of the bytes after the block in hexadecimal, a new
+/// line. Public for tests that edit a checkpoint on purpose.
+///
+/// # Errors
+/// The I/O error when the file cannot be read or written.
+pub fn seal(path: &Path) -> std::io::Result<()> {
+    use std::io::{Seek, SeekFrom, Write};
+    let bytes = std::fs::read(path)?;
+    let body = bytes.get(USERBLOCK as usize..).ok_or_else(|| std::io::Error::other("shorter than its user block"))?;
+    let mut head = SEAL.to_vec();
+    head.extend_from_slice(sha256_hex(body).as_bytes());
+    head.push(b'\n');
+    let mut f = std::fs::OpenOptions::new().write(true).open(path)?;
+    f.seek(SeekFrom::Start(0))?;
+    f.write_all(&head)?;
+    f.sync_all()
+}
+
+/// Whether the file carries a seal (false: a checkpoint of format 1, or one whose seal is
+/// gone); Err naming the mismatch when its bytes are not the ones sealed.
+fn check_seal(path: &Path) -> Result<bool, String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    if !bytes.starts_with(SEAL) {
+        return Ok(false);
+    }
+    let n = SEAL.len();
+    let stored = bytes.get(n..n + 64).and_then(|h| std::str::from_utf8(h).ok()).unwrap_or("");
+    let body = bytes.get(USERBLOCK as usize..).unwrap_or(&[]);
+    let actual = sha256_hex(body);
+    if stored != actual {
+        return Err(format!("checksum mismatch of the whole file (SHA-256 {actual}, sealed {stored}): the file was changed or damaged after it was written"));
+    }
+    Ok(true)
+}
 
 /// What can go wrong with a checkpoint.
 #[derive(Debug, Error)]
@@ -66,6 +115,8 @@ pub enum CheckpointError {
 #[derive(Clone, Debug)]
 pub struct Checkpoint {
     pub path: PathBuf,
+    /// The layout's version ([`FORMAT_VERSION`], or an older one still read).
+    pub format_version: u32,
     pub mpfem_version: String,
     pub case_sha256: String,
     pub step: usize,
@@ -133,12 +184,13 @@ pub fn write<T: Serialize>(dir: &Path, sim: &Simulation, case_sha256: &str, run:
     let scalars = cbor(&state.scalars).map_err(&werr)?;
     let run = cbor(run).map_err(&werr)?;
     {
-        let f = crate::h5::create(&tmp).map_err(h5err(&tmp))?;
+        let f = crate::h5::create_with_userblock(&tmp, USERBLOCK).map_err(h5err(&tmp))?;
         write_h5(&f, sim, &state, case_sha256, &scalars, &run).map_err(h5err(&tmp))?;
         f.flush().map_err(h5err(&tmp))?;
         f.close().map_err(h5err(&tmp))?;
     }
     let io = |e: std::io::Error| CheckpointError::Write { path: path.clone(), reason: e.to_string() };
+    seal(&tmp).map_err(io)?;
     std::fs::File::open(&tmp).and_then(|f| f.sync_all()).map_err(io)?;
     std::fs::rename(&tmp, &path).map_err(io)?;
     // the rename itself is durable once the directory is synced (best effort)
@@ -248,8 +300,14 @@ impl Checkpoint {
             return Err(CheckpointError::Missing { path });
         }
         let corrupt = |reason: String| CheckpointError::Corrupt { path: path.clone(), reason };
+        // the whole file against its seal before HDF5 reads a byte of it
+        let sealed = check_seal(&path).map_err(corrupt)?;
         let f = crate::h5::open(&path).map_err(|e| corrupt(e.to_string()))?;
-        Self::read_h5(&f, &path).map_err(corrupt)
+        let ck = Self::read_h5(&f, &path).map_err(corrupt)?;
+        if ck.format_version >= 2 && !sealed {
+            return Err(corrupt("no whole-file checksum at its start (a format 2 checkpoint carries one): the file was changed after it was written".into()));
+        }
+        Ok(ck)
     }
 
     fn read_h5(f: &hdf5::File, path: &Path) -> Result<Self, String> {
@@ -391,6 +449,7 @@ impl Checkpoint {
         let sol = Solution { time: scalars.time, u, fields, lambda, j0 };
         Ok(Self {
             path: path.to_path_buf(),
+            format_version: version,
             mpfem_version,
             case_sha256,
             step: step as usize,

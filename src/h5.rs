@@ -41,6 +41,17 @@ pub fn create(path: &Path) -> hdf5::Result<hdf5::File> {
     builder().create(path)
 }
 
+/// Create a file with a user block of `size` bytes (a power of two ≥ 512) at its start, which
+/// HDF5 leaves to the caller (a checkpoint keeps its whole-file checksum there).
+///
+/// # Errors
+/// The HDF5 error when the file cannot be created.
+pub fn create_with_userblock(path: &Path, size: u64) -> hdf5::Result<hdf5::File> {
+    let mut b = builder();
+    b.with_fcpl(|p| p.userblock(size));
+    b.create(path)
+}
+
 #[cfg(test)]
 mod tests {
     /// A file held open (and so locked by default) is still opened by a second handle, as an

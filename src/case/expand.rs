@@ -5,7 +5,7 @@
 
 use super::raw;
 use super::validate::{join_names, valid_body_name, Cx};
-use super::{die_of, CaseError, MaterialSpec, ShapeSpec, WallSpec, DEFAULT_LLOYD, MAX_PACKING_COUNT};
+use super::{die_of, CaseError, MaterialSpec, ShapeSpec, WallSpec, DEFAULT_LLOYD, MAX_GRID_PARTICLES, MAX_PACKING_COUNT, MAX_POLYGON_SIDES};
 use std::path::Path;
 
 impl Cx<'_>{
@@ -264,12 +264,18 @@ impl Cx<'_>{
         let names = self.material_list(key, g.material, g.materials, materials)?;
         let nx = self.count(&format!("{key}.nx"), self.req(g.nx, &format!("{key}.nx"), "particles along x (>= 1)")?, 1)?;
         let ny = self.count(&format!("{key}.ny"), self.req(g.ny, &format!("{key}.ny"), "particles along y (>= 1)")?, 1)?;
+        if nx.checked_mul(ny).is_none_or(|n| n > MAX_GRID_PARTICLES) {
+            return Err(self.err(&format!("{key}.nx"), format!("value {nx} with ny = {ny}: nx × ny particles; expected at most {MAX_GRID_PARTICLES} particles in a grid")));
+        }
         let shape = g.shape.unwrap_or_else(|| "disc".into());
         let sides = match self.choice(&format!("{key}.shape"), &shape, &["disc", "ellipse", "polygon"])? {
             "disc" => 0,
             "ellipse" => usize::MAX,
             _ => self.count(&format!("{key}.sides"), g.sides.unwrap_or(6), 3)?,
         };
+        if sides != usize::MAX && sides > MAX_POLYGON_SIDES {
+            return Err(self.err(&format!("{key}.sides"), format!("value {sides}; expected at most {MAX_POLYGON_SIDES} sides (a disc for more)")));
+        }
         let phi = self.req(g.solid_ratio, &format!("{key}.solid_ratio"), "the initial solid ratio in (0, 1)")?;
         let phi = self.num(&format!("{key}.solid_ratio"), phi, phi > 0.0 && phi < 1.0, "a solid ratio in (0, 1)")?;
         let h = self.positive(&format!("{key}.mesh_size"), self.req(g.mesh_size, &format!("{key}.mesh_size"), "an element size in mm")?, "an element size in mm")?;

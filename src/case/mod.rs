@@ -59,6 +59,11 @@ pub const DEFAULT_DENSITY: f64 = 1e-9;
 
 /// Largest `count` of a `[[packings]]` entry (the cells are built in O(count²)).
 pub const MAX_PACKING_COUNT: usize = 5000;
+/// Most particles a `[[grids]]` entry may hold (nx × ny): ten times the largest assembly the
+/// scaling estimates consider (10⁵); beyond, the grid's own bookkeeping would not fit a node.
+pub const MAX_GRID_PARTICLES: usize = 1_000_000;
+/// Most sides of a grid's polygon particles.
+pub const MAX_POLYGON_SIDES: usize = 1000;
 
 /// Default Lloyd relaxation steps of a `[[packings]]` entry.
 pub const DEFAULT_LLOYD: usize = 10;
