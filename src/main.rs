@@ -266,6 +266,12 @@ fn check(case: &Path) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if !k.outside_walls.is_empty() {
+        for m in &k.outside_walls {
+            eprintln!("error: {}: {m}", case.display());
+        }
+        return ExitCode::from(2);
+    }
     if k.n_inverted > 0 {
         for (i, name, n) in &k.inverted_bodies {
             eprintln!("error: {}: bodies[{i}] (\"{name}\"): its mesh has {n} inverted element(s); expected a shape and mesh_size / divisions that mesh it (a self-touching outline, or divisions too few for a curved side)", case.display());

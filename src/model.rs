@@ -203,6 +203,37 @@ impl Model {
             .collect()
     }
 
+    /// The particles that lie partly or wholly beyond a wall at the start (t = 0): for each,
+    /// a message naming the body, the wall and how far its farthest node is beyond it. A node
+    /// on the wall, or beyond it by round-off (1e-9 of the die's size), is inside.
+    pub fn outside_walls(&self) -> Vec<String> {
+        let walls = self.wall_planes(0.0);
+        if walls.is_empty() {
+            return Vec::new();
+        }
+        let size = self.x0.iter().flat_map(|p| [p[0].abs(), p[1].abs()]).chain(walls.iter().flat_map(|w| [w.point[0].abs(), w.point[1].abs()])).fold(0.0, f64::max);
+        let tol = 1e-9 * size.max(1.0);
+        let mut out = Vec::new();
+        for (i, b) in self.bodies.iter().enumerate() {
+            let nodes = &self.x0[b.node_offset..b.node_offset + b.mesh.nodes.len()];
+            for (w, wall) in walls.iter().enumerate() {
+                let depth = |p: &[f64; 2]| (p[0] - wall.point[0]) * wall.normal[0] + (p[1] - wall.point[1]) * wall.normal[1];
+                let (lo, hi) = nodes.iter().map(depth).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| (a.min(d), b.max(d)));
+                if lo < -tol {
+                    let side = format!("{:?}", self.loading.walls[w].side).to_lowercase();
+                    let how = if hi < -tol { "lies wholly" } else { "reaches" };
+                    out.push(format!(
+                        "bodies[{i}] (\"{}\") {how} beyond walls[{w}] (the {side} wall at {} mm): its farthest node {:.4} mm past it; expected every particle inside the die at the start (move the wall or the particle, or set the grid's or packing's solid_ratio lower)",
+                        b.name,
+                        self.loading.walls[w].position,
+                        -lo
+                    ));
+                }
+            }
+        }
+        out
+    }
+
     /// Whether the global tangent of this model is symmetric (see [`symmetric_tangent`]; the
     /// materials of the bodies count).
     pub fn symmetric_tangent(&self) -> bool {

@@ -224,6 +224,8 @@ pub struct CaseCheck {
     pub n_inverted: usize,
     /// The bodies with inverted elements: (index in `bodies`, name, how many).
     pub inverted_bodies: Vec<(usize, String, usize)>,
+    /// The particles beyond a wall at the start ([`Model::outside_walls`]): one message each.
+    pub outside_walls: Vec<String>,
 }
 
 /// Build the model of case `c` and measure its meshes ([`crate::mesh::quality::quality`]).
@@ -241,6 +243,7 @@ pub fn check(c: &Case) -> Result<CaseCheck, crate::model::ModelError> {
         max_aspect_ratio: 0.0,
         n_inverted: 0,
         inverted_bodies: Vec::new(),
+        outside_walls: m.outside_walls(),
     };
     for (i, b) in m.bodies.iter().enumerate() {
         let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
@@ -504,6 +507,13 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         Ok(m) => m,
         Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
     };
+    // a particle beyond a wall at the start would be pushed through it or lost (a fresh run;
+    // a restart continues the checkpoint's configuration)
+    if checkpoint.is_none() {
+        if let Some(m) = model.outside_walls().into_iter().next() {
+            return Ok(bad_input(true, reporter, format!("{label}: {m}")));
+        }
+    }
     let formulation = format!("{:?}", c.formulation);
     let n_bodies = model.bodies.len();
     let title = c.title.clone();

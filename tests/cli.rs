@@ -198,3 +198,48 @@ fn absurd_mesh_sizes_are_refused_before_meshing() {
         }
     }
 }
+
+/// A particle partly or wholly outside the die (issue "nothing lost, nothing silent", item 3)
+/// is refused by `mpfem check` and `mpfem run` with exit 2, naming the body, the wall and how
+/// far it reaches past it, before anything is written: a disc of radius 10 mm centred 5 mm
+/// inside the left wall reaches 5 mm past it; one centred at x = −50 mm lies wholly beyond it.
+/// A disc touching the wall (centred 10 mm inside it) is accepted.
+#[test]
+fn particles_outside_the_walls_are_refused() {
+    let dir = tmpdir("outside");
+    let case = |name: &str, x: f64| {
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "[[materials]]\nname = \"m\"\nmodel = \"elastic\"\nyoungs_modulus = 1000.0\npoisson_ratio = 0.3\n\n\
+                 [[bodies]]\nname = \"d\"\nmaterial = \"m\"\nmesh_size = 2.0\nshape = {{ type = \"disc\", center = [{x}, 50.0], radius = 10.0 }}\n\n\
+                 [[walls]]\nside = \"left\"\nposition = 0.0\nvelocity = 1.0\n\n[[walls]]\nside = \"right\"\nposition = 100.0\n\n\
+                 [[walls]]\nside = \"bottom\"\nposition = 0.0\n\n[[walls]]\nside = \"top\"\nposition = 100.0\n\n\
+                 [time]\nend = 0.1\ndt = 0.1\n"
+            ),
+        )
+        .unwrap();
+        p
+    };
+    for (name, x, what, depth) in [("partly", 5.0, "reaches beyond walls[0] (the left wall at 0 mm)", "5.0000 mm past it"), ("wholly", -50.0, "lies wholly beyond walls[0]", "60.0000 mm past it")] {
+        let p = case(name, x);
+        for cmd in ["check", "run"] {
+            let out = dir.join(format!("{name}-{cmd}"));
+            let mut c = mpfem();
+            c.arg(cmd).arg(&p);
+            if cmd == "run" {
+                c.args(["--quiet", "--no-plots", "--out"]).arg(&out);
+            }
+            let o = c.output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{name} {cmd}: {err}");
+            assert!(err.contains("bodies[0] (\"d\")") && err.contains(what) && err.contains(depth), "{name} {cmd}: {err}");
+            assert!(!out.join("history.csv").exists(), "{name} {cmd}: a run started");
+        }
+    }
+    let p = case("touching", 10.0);
+    let o = mpfem().arg("check").arg(&p).output().unwrap();
+    assert!(o.status.success(), "a disc touching the wall: {}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -13,7 +13,9 @@ impl Cx<'_>{
     fn die(&self, key: &str, what: &str, walls: &[WallSpec]) -> Result<[f64; 4], CaseError> {
         let [x0, x1, y0, y1] = die_of(walls).ok_or_else(|| self.err(key, format!("a {what} fills the die, which needs all four [[walls]] (left, right, bottom, top)")))?;
         if !(x1 > x0 && y1 > y0) {
-            return Err(self.err("walls", format!("the die [{x0}, {x1}] x [{y0}, {y1}] mm is empty; expected left < right and bottom < top")));
+            // (absurd positions in exponent form, not as 300 digits)
+            let v = |x: f64| if x == 0.0 || (1e-4..1e9).contains(&x.abs()) { format!("{x}") } else { format!("{x:e}") };
+            return Err(self.err("walls", format!("the die [{}, {}] x [{}, {}] mm is empty; expected left < right and bottom < top", v(x0), v(x1), v(y0), v(y1))));
         }
         Ok([x0, x1, y0, y1])
     }
