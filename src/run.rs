@@ -330,6 +330,21 @@ pub fn copy_run_files(from: &Path, to: &Path) -> Result<(), RunError> {
     Ok(())
 }
 
+/// Write the checkpoint of `sim`, whose last converged step is `at` (step, time), and say so:
+/// false when it could not be written (a warning says why; the previous one stays).
+fn checkpoint_now(out: &Path, sim: &Simulation, sha: &str, state: &RunState, at: (usize, f64), reporter: &dyn Reporter) -> bool {
+    match crate::checkpoint::write(out, sim, sha, state) {
+        Ok(p) => {
+            reporter.note(Note::Info, &format!("checkpoint at step {}, t = {} s: {}", at.0, seconds(at.1), p.display()));
+            true
+        }
+        Err(e) => {
+            reporter.note(Note::Warning, &e.to_string());
+            false
+        }
+    }
+}
+
 /// The name of the signal whose number the stop flag holds.
 fn signal_name(sig: usize) -> String {
     match sig as i32 {
@@ -676,16 +691,9 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 history_s,
                 restarts: restarts.clone(),
             };
-            match crate::checkpoint::write(out, s, &sha, &state) {
-                Ok(p) => {
-                    reporter.note(Note::Info, &format!("checkpoint at step {}, t = {} s: {}", r.step, seconds(r.time), p.display()));
-                    ckpt_written = Some(r.step);
-                    ckpt_failed = false;
-                }
-                Err(e) => {
-                    reporter.note(Note::Warning, &e.to_string());
-                    ckpt_failed = true;
-                }
+            ckpt_failed = !checkpoint_now(out, s, &sha, &state, (r.step, r.time), reporter);
+            if !ckpt_failed {
+                ckpt_written = Some(r.step);
             }
             last_ckpt = Instant::now();
             ckpt_s += t0.elapsed().as_secs_f64();
@@ -704,16 +712,9 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             s.stop_reason = format!("interrupted by {} (the step under way abandoned)", signal_name(signal));
             let t0 = Instant::now();
             let state = RunState { phi0, max_body_volume_error, curve: curve.clone(), wall_time_s: wall_before + started.elapsed().as_secs_f64(), history_s, restarts: restarts.clone() };
-            match crate::checkpoint::write(out, &sim, &sha, &state) {
-                Ok(p) => {
-                    reporter.note(Note::Info, &format!("checkpoint at step {}, t = {} s: {}", s.steps, seconds(s.final_time), p.display()));
-                    ckpt_written = Some(s.steps);
-                    ckpt_failed = false;
-                }
-                Err(e) => {
-                    reporter.note(Note::Warning, &e.to_string());
-                    ckpt_failed = true;
-                }
+            ckpt_failed = !checkpoint_now(out, &sim, &sha, &state, (s.steps, s.final_time), reporter);
+            if !ckpt_failed {
+                ckpt_written = Some(s.steps);
             }
             ckpt_s += t0.elapsed().as_secs_f64();
         }
