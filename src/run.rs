@@ -705,7 +705,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     });
     if let Ok(s) = result.as_mut() {
         s.wall_time_s += wall_before;
-        if s.interrupted && s.stop_reason.starts_with("interrupted during a step") {
+        if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED {
             // the signal came during a step, which was abandoned: the checkpoint of the last
             // converged state, which the observer did not see with the signal
             let signal = stop_flag.load(Ordering::SeqCst);

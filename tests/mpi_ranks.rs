@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
-use common::{mpfem, tmpdir};
+use common::{mpfem, mpirun, tmpdir};
 
 const CASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3.toml");
 /// Elastic and frictionless (a symmetric positive definite tangent), with the Schwarz PCG.
@@ -36,17 +36,6 @@ fn read_history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let header: Vec<String> = lines.next().expect("header").split(',').map(str::to_string).collect();
     let rows = lines.map(|l| l.split(',').map(|v| v.trim().parse::<f64>().expect("number")).collect()).collect();
     (header, rows)
-}
-
-/// `mpirun -n ranks mpfem` (the mpfem arguments follow): as root (CI containers) Open MPI
-/// wants both variables; the "isolated" launcher starts local ranks without ssh (which a
-/// container may lack: Open MPI's default launcher then refuses to start); more ranks than
-/// cores need --oversubscribe; one thread per rank, not bound to a core.
-fn mpirun(ranks: usize) -> Command {
-    let mut c = Command::new("mpirun");
-    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
-    c.args(["--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string(), env!("CARGO_BIN_EXE_mpfem")]);
-    c
 }
 
 /// The processes whose parent is `pid` (from /proc: the fourth field of /proc/PID/stat).

@@ -24,21 +24,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::tmpdir;
+use common::{mpirun, tmpdir};
 
 const CASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3.toml");
 const CASE_ELASTIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3_pcg.toml");
 const COOK: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/jobs/verification/cook_membrane.toml");
 const TOL: f64 = 1e-8;
 const COMPARED: [&str; 9] = ["solid_ratio", "p_left", "p_right", "p_bottom", "p_top", "f_left", "f_right", "f_bottom", "f_top"];
-
-/// `mpirun -n ranks mpfem` as root in a container (see tests/mpi_ranks.rs).
-fn mpirun(ranks: usize) -> Command {
-    let mut c = Command::new("mpirun");
-    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
-    c.args(["--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string(), env!("CARGO_BIN_EXE_mpfem")]);
-    c
-}
 
 /// `mpfem run case --out out` serially (no launcher) or on `ranks` ranks, with `extra`
 /// arguments; its output.

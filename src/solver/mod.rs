@@ -94,6 +94,11 @@ pub enum NewtonFailure {
     Interrupted,
 }
 
+/// The stop reason [`Simulation::run_controlled`] gives when a stop asked for during a step
+/// ([`Simulation::set_interrupt`]) abandoned it: the caller checkpoints the last converged
+/// state and may say why in its own words.
+pub const STOP_ABANDONED: &str = "interrupted during a step (abandoned)";
+
 /// A run that could not go on.
 #[derive(Debug, Error)]
 pub enum SolveError {

@@ -40,7 +40,7 @@ impl Simulation {
             let report = match self.advance(dt_try) {
                 Ok(r) => r,
                 Err(SolveError::StepFailed { cause: NewtonFailure::Interrupted, .. }) => {
-                    stop_reason = "interrupted during a step (abandoned)".to_string();
+                    stop_reason = super::STOP_ABANDONED.to_string();
                     interrupted = true;
                     break;
                 }

@@ -15,6 +15,17 @@ pub fn mpfem() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mpfem"))
 }
 
+/// `mpirun -n ranks mpfem` (the mpfem arguments follow): as root (CI containers) Open MPI
+/// wants both variables; the "isolated" launcher starts local ranks without ssh (which a
+/// container may lack: Open MPI's default launcher then refuses to start); more ranks than
+/// cores need --oversubscribe; one thread per rank, not bound to a core.
+pub fn mpirun(ranks: usize) -> Command {
+    let mut c = Command::new("mpirun");
+    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1").env("OMPI_MCA_plm", "isolated");
+    c.args(["--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string(), env!("CARGO_BIN_EXE_mpfem")]);
+    c
+}
+
 /// An empty scratch folder `mpfem-<test crate>-<process id>-<name>` in the system's temporary
 /// folder (emptied when it exists). It stays after the test, to be looked at when the test
 /// failed; the folders of the same test left by earlier runs (another process id that is no
