@@ -73,6 +73,7 @@ pub fn assembly_fixture(n: usize, law: Law, threads: usize) -> Fixture {
         bodies: vec![crate::model::Body { name: "block".into(), contact_h: crate::model::Body::mean_element_size(&mesh), mesh, material: 0, node_offset: 0, elem_offset: 0, mesh_size: 1.0 }],
         reaction_groups: vec![],
         displacement_groups: vec![],
+        whole: None,
     };
     let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
     let (assembler, kk) = Assembler::new(&model, eq, n_free);

@@ -125,6 +125,33 @@ pub struct Model {
     pub displacement_groups: Vec<NodeGroup>,
     /// The points of `probes.csv`.
     pub probes: Vec<Probe>,
+    /// When this model is one process's part of a distributed model ([`Model::part`]): the
+    /// facts of the whole model its physics depends on. `None` for a whole model.
+    pub whole: Option<WholeModel>,
+}
+
+/// Where the nodes and elements of a part of a model ([`Model::part`]) are in the whole model.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PartMap {
+    /// The whole model's node for each node of the part.
+    pub node: Vec<usize>,
+    /// The whole model's element for each element of the part.
+    pub element: Vec<usize>,
+}
+
+/// What a part of a model ([`Model::part`]) keeps of the whole one: the figures that set
+/// parameters of the physics for every body alike (the barrier's d̂ and κ, the ties'
+/// stiffness), which its own bodies alone would give differently on each process.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WholeModel {
+    /// Bodies of the whole model.
+    pub n_bodies: usize,
+    /// Smallest contact length h of its bodies (mm, [`Body::contact_h`]).
+    pub h_min: f64,
+    /// Smallest Young's modulus of its bodies (MPa).
+    pub e_min: f64,
+    /// Largest coordinate magnitude of its reference configuration (mm).
+    pub extent: f64,
 }
 
 /// Whether the global tangent is symmetric: every material's consistent tangent is, no load
@@ -165,6 +192,120 @@ impl Model {
         2 * self.x0.len()
     }
 
+    /// The whole model's facts ([`WholeModel`]): this model's own for a whole model, those of
+    /// the model it is a part of otherwise.
+    pub fn whole_facts(&self) -> WholeModel {
+        self.whole.unwrap_or_else(|| WholeModel {
+            n_bodies: self.bodies.len(),
+            h_min: self.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min),
+            e_min: self.bodies.iter().map(|b| self.materials[b.material].youngs_modulus()).fold(f64::INFINITY, f64::min),
+            extent: self.x0.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max),
+        })
+    }
+
+    /// One process's part of this model in a distributed run: the bodies `bodies` (indices
+    /// into `self.bodies`, each once), in that order, of which the first `n_owned` are the
+    /// process's own and the others its ghosts (other processes' bodies near its own, whose
+    /// boundaries its contacts see). Returns the part and which node and element of `self`
+    /// each of its nodes and elements is.
+    ///
+    /// The part has the walls, amplitudes, materials and parameters of `self`, its facts
+    /// ([`Model::whole`], so that d̂, κ and the ties' stiffness are those of the whole model),
+    /// the prescribed dofs of all its nodes (a ghost's dof is prescribed where its owner's is),
+    /// and the loads, output groups and probes of its own bodies only (each is then counted
+    /// by one process).
+    ///
+    /// # Errors
+    /// [`ModelError::NoBody`] for an index out of range or listed twice.
+    pub fn part(&self, bodies: &[usize], n_owned: usize) -> Result<(Model, PartMap), ModelError> {
+        let nb = self.bodies.len();
+        let mut local_body = vec![usize::MAX; nb];
+        for (k, &b) in bodies.iter().enumerate() {
+            if b >= nb || local_body[b] != usize::MAX {
+                return Err(ModelError::NoBody(b));
+            }
+            local_body[b] = k;
+        }
+        let n_owned = n_owned.min(bodies.len());
+        // node of self -> node of the part (usize::MAX: not in it), and whether it is owned
+        let mut local_node = vec![usize::MAX; self.x0.len()];
+        let mut local_elem = vec![usize::MAX; self.elements.len()];
+        let (mut x0, mut elements, mut elem_material, mut elem_body, mut parts) = (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut map = PartMap::default();
+        for (k, &b) in bodies.iter().enumerate() {
+            let body = &self.bodies[b];
+            let (node_offset, elem_offset) = (x0.len(), elements.len());
+            for n in 0..body.mesh.n_nodes() {
+                local_node[body.node_offset + n] = node_offset + n;
+                map.node.push(body.node_offset + n);
+            }
+            x0.extend_from_slice(&self.x0[body.node_offset..body.node_offset + body.mesh.n_nodes()]);
+            for (j, e) in body.mesh.elements.iter().enumerate() {
+                local_elem[body.elem_offset + j] = elements.len();
+                map.element.push(body.elem_offset + j);
+                elements.push(e.map(|n| n + node_offset));
+                elem_material.push(body.material);
+                elem_body.push(k);
+            }
+            parts.push(Body { node_offset, elem_offset, ..body.clone() });
+        }
+        let n_owned_nodes = parts.get(n_owned).map_or(x0.len(), |b| b.node_offset);
+        let owned_node = |n: usize| local_node[n] != usize::MAX && local_node[n] < n_owned_nodes;
+        let mut new = Model { bodies: parts, x0: Vec::new(), elements, elem_material, elem_body, whole: Some(self.whole_facts()), ..self.clone_parameters() };
+        new.loading.prescribed = self.loading.prescribed.iter().filter(|p| local_node[p.dof / 2] != usize::MAX).map(|p| crate::loading::PrescribedDof { dof: 2 * local_node[p.dof / 2] + p.dof % 2, ..*p }).collect();
+        new.loading.prescribed.sort_by_key(|p| p.dof);
+        new.loading.loads = self
+            .loading
+            .loads
+            .iter()
+            .map(|l| crate::loading::EdgeLoad { edges: l.edges.iter().filter(|e| owned_node(e[0]) && owned_node(e[1])).map(|e| e.map(|n| local_node[n])).collect(), ..l.clone() })
+            .collect();
+        let groups = |gs: &[NodeGroup]| -> Vec<NodeGroup> { gs.iter().map(|g| NodeGroup { label: g.label.clone(), nodes: g.nodes.iter().filter(|&&n| owned_node(n)).map(|&n| local_node[n]).collect() }).collect() };
+        new.reaction_groups = groups(&self.reaction_groups);
+        new.displacement_groups = groups(&self.displacement_groups);
+        let owned_elem = |e: usize| local_elem[e] != usize::MAX && local_body[self.elem_body[e]] < n_owned;
+        new.probes = self
+            .probes
+            .iter()
+            .filter_map(|p| {
+                let at = match &p.at {
+                    ProbeAt::Point { element, xi } => owned_elem(*element).then(|| ProbeAt::Point { element: local_elem[*element], xi: *xi })?,
+                    ProbeAt::Node { node, corners } => owned_node(*node).then(|| ProbeAt::Node { node: local_node[*node], corners: corners.iter().map(|&(e, a)| (local_elem[e], a)).collect() })?,
+                };
+                Some(Probe { name: p.name.clone(), at })
+            })
+            .collect();
+        new.x0 = x0;
+        Ok((new, map))
+    }
+
+    /// A copy of everything but the meshes, the numbering and what refers to nodes (for
+    /// [`Model::part`], which fills those in).
+    fn clone_parameters(&self) -> Model {
+        Model {
+            title: self.title.clone(),
+            formulation: self.formulation,
+            plane_stress: self.plane_stress,
+            element: self.element,
+            loading: crate::loading::Loading { prescribed: Vec::new(), loads: Vec::new(), ..self.loading.clone() },
+            contact: self.contact.clone(),
+            stabilisation: self.stabilisation.clone(),
+            stop: self.stop.clone(),
+            remesh: self.remesh.clone(),
+            materials: self.materials.clone(),
+            densities: self.densities.clone(),
+            bodies: Vec::new(),
+            x0: Vec::new(),
+            elements: Vec::new(),
+            elem_material: Vec::new(),
+            elem_body: Vec::new(),
+            reaction_groups: Vec::new(),
+            displacement_groups: Vec::new(),
+            probes: Vec::new(),
+            whole: self.whole,
+        }
+    }
+
     /// Whether bodies can touch: there are walls or several bodies.
     pub fn has_contact(&self) -> bool {
         !self.loading.walls.is_empty() || self.bodies.len() > 1
@@ -190,7 +331,11 @@ impl Model {
     /// The barrier contact of this model (`[contact] method = "barrier"`; `None` with another
     /// method or when nothing can touch).
     pub fn barrier_contact(&self) -> Option<crate::contact::barrier_problem::BarrierContact> {
-        (self.contact.method == ContactMethod::Barrier && self.has_contact()).then(|| crate::contact::barrier_problem::BarrierContact::of_bodies(&self.contact_bodies(), &self.x0, self.contact.dhat, self.contact.integration))
+        (self.contact.method == ContactMethod::Barrier && self.has_contact()).then(|| {
+            // (a part's d̂ and κ are the whole model's)
+            let w = self.whole_facts();
+            crate::contact::barrier_problem::BarrierContact::of_bodies(&self.contact_bodies(), &self.x0, self.contact.dhat, self.contact.integration, (w.h_min, w.e_min))
+        })
     }
 
     /// The rigid walls at time `t` as the planes the contact kernels take.

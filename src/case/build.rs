@@ -240,6 +240,7 @@ impl Model {
             elem_body,
             reaction_groups,
             displacement_groups,
+            whole: None,
             probes,
         })
     }

@@ -38,6 +38,11 @@ pub trait Collective: Send + Sync {
     /// Every process's `local` values concatenated in rank order, on rank 0; empty on the
     /// others.
     fn gather_varcount_to_root(&self, local: &[f64]) -> Vec<f64>;
+    /// A personalised exchange (all-to-all with counts per pair): `send[r]` goes to rank `r`
+    /// (`send` has one buffer per process, empty ones included); the result's `r`-th buffer
+    /// is what rank `r` sent to this one. The ghost exchanges of [`crate::parallel`] go
+    /// through it.
+    fn exchange(&self, send: &[Vec<f64>]) -> Vec<Vec<f64>>;
     /// Smallest `x` over the processes, on every process.
     fn min_u64(&self, x: u64) -> u64;
     /// Largest `x` over the processes, on every process.
@@ -67,6 +72,9 @@ impl Collective for Serial {
     }
     fn gather_varcount_to_root(&self, local: &[f64]) -> Vec<f64> {
         local.to_vec()
+    }
+    fn exchange(&self, send: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        send.to_vec()
     }
     fn min_u64(&self, x: u64) -> u64 {
         x

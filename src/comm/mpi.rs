@@ -2,7 +2,7 @@
 
 use super::Collective;
 use mpi::collective::SystemOperation;
-use mpi::datatype::PartitionMut;
+use mpi::datatype::{Partition, PartitionMut};
 use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
@@ -141,6 +141,26 @@ impl Collective for MpiCollective {
         let mut part = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
         root.gather_varcount_into_root(local, &mut part);
         out
+    }
+
+    fn exchange(&self, send: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        assert_eq!(send.len(), self.size, "one send buffer per process");
+        if self.size <= 1 {
+            return send.to_vec();
+        }
+        let send_counts: Vec<Count> = send.iter().map(|b| b.len() as Count).collect();
+        let mut recv_counts = vec![0 as Count; self.size];
+        self.world.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
+        let (send_displs, _) = displacements(&send_counts);
+        let (recv_displs, total) = displacements(&recv_counts);
+        let flat: Vec<f64> = send.concat();
+        let mut out = vec![0.0; total];
+        {
+            let part = Partition::new(&flat[..], &send_counts[..], &send_displs[..]);
+            let mut recv = PartitionMut::new(&mut out[..], &recv_counts[..], &recv_displs[..]);
+            self.world.all_to_all_varcount_into(&part, &mut recv);
+        }
+        recv_counts.iter().zip(&recv_displs).map(|(&c, &d)| out[d as usize..(d + c) as usize].to_vec()).collect()
     }
 
     fn min_u64(&self, x: u64) -> u64 {

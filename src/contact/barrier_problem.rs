@@ -371,6 +371,11 @@ pub struct BarrierContact {
     quad_x: Vec<[f64; 2]>,
     quad_slaves: Vec<(usize, usize)>,
     quad_virt: Vec<(usize, usize, f64, f64)>,
+    /// The bodies whose pairs this process evaluates ([`BarrierContact::evaluate_only`]): the
+    /// pairs whose first side — a node, a point of an edge, a node facing a wall — is on one
+    /// of them; empty: every body. And the boundary nodes of those bodies.
+    first_sides: Vec<bool>,
+    first_nodes: Vec<(usize, usize)>,
 }
 
 /// Gauss–Legendre points on each boundary edge whose barrier terms carry the contact (see the
@@ -424,10 +429,12 @@ impl BarrierContact {
     /// (its gap to the barrier's zero lies between d̂/100 and d̂, [`default_kappa`]). With
     /// `integration` [`super::BarrierIntegration::Edges`] the Gauss points of the edges carry
     /// the contact between particles (module docs), with `Nodes` the nodes alone, at full reach.
-    pub fn of_bodies(bodies: &[super::ContactBody], x0: &[[f64; 2]], dhat: Option<f64>, integration: super::BarrierIntegration) -> Self {
+    ///
+    /// `(h_min, e_min)` are the smallest contact length h and Young's modulus of every body of
+    /// the model (those of `bodies` when they are the whole model; a process's part of a
+    /// distributed model passes the whole model's, so that d̂ and κ are the same everywhere).
+    pub fn of_bodies(bodies: &[super::ContactBody], x0: &[[f64; 2]], dhat: Option<f64>, integration: super::BarrierIntegration, (h_min, e_min): (f64, f64)) -> Self {
         let b = super::boundary::Boundary::new(bodies, x0, false);
-        let h_min = b.h_min();
-        let e_min = b.body_e.iter().copied().fold(f64::INFINITY, f64::min);
         let dhat = dhat.unwrap_or_else(|| default_dhat(h_min));
         let mut c = Self::new(b.segments, b.slaves, dhat, default_kappa(e_min, h_min, dhat));
         c.wall_offset = 0.5 * dhat;
@@ -452,7 +459,30 @@ impl BarrierContact {
                 vertex_segments[v].push(i);
             }
         }
-        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments, node_reach: 1.0, quad_points: 0, quad_scale: Vec::new(), quad_x: Vec::new(), quad_slaves: Vec::new(), quad_virt: Vec::new() }
+        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments, node_reach: 1.0, quad_points: 0, quad_scale: Vec::new(), quad_x: Vec::new(), quad_slaves: Vec::new(), quad_virt: Vec::new(), first_sides: Vec::new(), first_nodes: Vec::new() }
+    }
+
+    /// Evaluate (and check for collisions, [`BarrierContact::collision_free_step`]) only the
+    /// pairs whose first side lies on a body `b` with `bodies[b]`: a process of a distributed
+    /// run evaluates the pairs of its own particles, whose second sides may be on its ghosts;
+    /// each pair is then evaluated by one process. An empty `bodies` evaluates every pair.
+    pub fn evaluate_only(&mut self, bodies: Vec<bool>) {
+        self.first_nodes = if bodies.is_empty() { Vec::new() } else { self.nodes.iter().copied().filter(|&(_, b)| bodies.get(b) == Some(&true)).collect() };
+        self.first_sides = bodies;
+    }
+
+    /// The boundary nodes that are first sides of the pairs evaluated here.
+    fn first_nodes(&self) -> &[(usize, usize)] {
+        if self.first_sides.is_empty() {
+            &self.nodes
+        } else {
+            &self.first_nodes
+        }
+    }
+
+    /// Whether the pairs with a first side on `body` are evaluated here.
+    fn first_side(&self, body: usize) -> bool {
+        self.first_sides.is_empty() || self.first_sides.get(body) == Some(&true)
     }
 
     /// The barrier terms at coordinates `x` (every node) with the walls `walls` where they are;
@@ -472,7 +502,7 @@ impl BarrierContact {
         out.quads.clear();
         // the node terms: reach r d̂ and stiffness κ / r⁴ (the same barrier near contact)
         let (dn, kn) = (self.dhat * self.node_reach, self.kappa / self.node_reach.powi(4));
-        for (node, s) in self.search.pairs(x, &self.nodes, self.dhat) {
+        for (node, s) in self.search.pairs(x, self.first_nodes(), self.dhat) {
             let seg = self.segments[s];
             if self.is_tied(node, seg.body) {
                 continue;
@@ -491,6 +521,9 @@ impl BarrierContact {
             slaves.clear();
             virt.clear();
             for (e, seg) in self.segments.iter().enumerate() {
+                if !self.first_side(seg.body) {
+                    continue;
+                }
                 let (c, d) = (x[seg.nodes[0]], x[seg.nodes[1]]);
                 for (j, &xi) in xis.iter().enumerate() {
                     slaves.push((n + virt.len(), seg.body));
@@ -537,7 +570,7 @@ impl BarrierContact {
         for (w, wall) in walls.iter().enumerate() {
             let n = unit(wall.normal);
             let point = [wall.point[0] - self.wall_offset * n[0], wall.point[1] - self.wall_offset * n[1]];
-            for &(node, _) in &self.nodes {
+            for &(node, _) in self.first_nodes() {
                 let (d, sq) = point_wall_sq_distance(x[node], point, n);
                 if d >= self.dhat {
                     continue;
@@ -785,10 +818,11 @@ impl BarrierContact {
     /// they sweep overlap ([`for_each_swept_pair`]).
     pub fn collision_free_step(&self, x0: &[[f64; 2]], x1: &[[f64; 2]], walls0: &[Wall], walls1: &[Wall]) -> f64 {
         let moves = self.nodes.iter().any(|&(n, _)| x1[n] != x0[n]);
+        let first = self.first_nodes();
         let mut toi: f64 = f64::INFINITY;
         if moves {
             let segments = &self.segments;
-            for_each_swept_pair(segments, x0, x1, &self.nodes, |node, s| {
+            for_each_swept_pair(segments, x0, x1, first, |node, s| {
                 let seg = segments[s];
                 if self.is_tied(node, seg.body) {
                     return;
@@ -803,7 +837,7 @@ impl BarrierContact {
             let n = unit(w0.normal);
             let shift = (w1.point[0] - w0.point[0]) * n[0] + (w1.point[1] - w0.point[1]) * n[1];
             let point = [w0.point[0] - self.wall_offset * n[0], w0.point[1] - self.wall_offset * n[1]];
-            for &(node, _) in &self.nodes {
+            for &(node, _) in first {
                 let (d0, _) = point_wall_sq_distance(x0[node], point, n);
                 if let Some(t) = point_wall_toi(d0, x0[node], x1[node], n, shift) {
                     toi = toi.min(t);

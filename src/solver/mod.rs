@@ -190,14 +190,16 @@ impl Simulation {
             (pair_dofs, multiplier_dofs, node_dofs) = (c.pair_dof_lists(), c.multiplier_dofs(), c.node_dof_lists());
             assembler.set_terms(&mut kk, &pair_dofs, &multiplier_dofs);
         }
-        let h = model.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min);
+        // (the whole model's figures, also when this is a process's part of it)
+        let whole = model.whole_facts();
+        let h = whole.h_min;
         let mu_of = |k: &crate::contact::ContactKind| match k {
             crate::contact::ContactKind::Rubbing { mu } => mu.max(0.0),
             _ => 0.0,
         };
         // each particle's Young's modulus, and the softest
         let body_e: Vec<f64> = model.bodies.iter().map(|b| model.materials[b.material].youngs_modulus()).collect();
-        let e_min = body_e.iter().copied().fold(f64::INFINITY, f64::min);
+        let e_min = whole.e_min;
         // cohering particles with the barrier: ties of stiffness 100 E (softest particle)
         let tie_stiffness = if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
             barrier::TIE_STIFFNESS * e_min
@@ -208,7 +210,7 @@ impl Simulation {
         if let Some(b) = barrier.as_mut() {
             // cohering particles that touch (or nearly) at the start are tied at once
             if tie_stiffness > 0.0 {
-                b.extent = model.x0.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max);
+                b.extent = whole.extent;
                 b.contact.tie_close(&model.x0, None);
                 b.update_tie_floor();
             }

@@ -1,0 +1,197 @@
+//! A process's part of a distributed model: its own particles and a ghost layer.
+//!
+//! The particles are dealt out whole (the METIS partition of the particle graph,
+//! [`crate::distribute`]). A process holds the bodies it owns and, as ghosts, the bodies of
+//! other processes that lie within a reach of one of its own (their bounding boxes, grown by
+//! the reach, overlap) — the contact search distance: every contact pair whose first side is
+//! on an owned body then has its second side at hand. A ghost is held whole for now (its mesh
+//! and its nodes); only its boundary is ever read.
+//!
+//! The nodes are numbered over all processes with one contiguous range per process, in rank
+//! order, each process's owned bodies in ascending order ([`DistributedNumbering`]); the
+//! part's local numbering puts its owned nodes first in that order and its ghosts' nodes after
+//! them, and an [`IndexMap`] moves values between the owners and the ghosts.
+
+use super::index_map::{IndexMap, IndexMapError};
+use crate::comm::Collective;
+use crate::model::{Model, ModelError, PartMap};
+use std::sync::Arc;
+
+/// The axis-aligned bounding box of each body's nodes at coordinates `x` (every node of
+/// `model`), as the partitioner's particles (element count as weight).
+pub fn body_boxes(model: &Model, x: &[[f64; 2]]) -> Vec<partition::Particle> {
+    model
+        .bodies
+        .iter()
+        .map(|b| {
+            let nodes = &x[b.node_offset..b.node_offset + b.mesh.nodes.len()];
+            let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for p in nodes {
+                for k in 0..2 {
+                    min[k] = min[k].min(p[k]);
+                    max[k] = max[k].max(p[k]);
+                }
+            }
+            if nodes.is_empty() {
+                (min, max) = ([0.0; 2], [0.0; 2]);
+            }
+            partition::Particle { elements: b.mesh.elements.len() as u64, min, max }
+        })
+        .collect()
+}
+
+/// The ghosts of process `rank`: the bodies other processes own (`owner`) whose boxes come
+/// within `reach` of the box of a body it owns, ascending. (The relation is symmetric: when
+/// process p ghosts q's body B for its body A, q ghosts A for B.)
+///
+/// # Errors
+/// A box that is not finite, or a reach that is negative or not finite (the partitioner's
+/// message).
+pub fn ghost_bodies(boxes: &[partition::Particle], owner: &[usize], rank: usize, reach: f64) -> Result<Vec<usize>, partition::PartitionError> {
+    let graph = partition::particle_graph(boxes, partition::Adjacency::Proximity { gap: reach })?;
+    let mut ghost = vec![false; boxes.len()];
+    for (b, _) in owner.iter().enumerate().filter(|&(_, &o)| o == rank) {
+        for &c in graph.neighbors(b) {
+            if owner[c] != rank {
+                ghost[c] = true;
+            }
+        }
+    }
+    Ok(ghost.iter().enumerate().filter_map(|(b, &g)| g.then_some(b)).collect())
+}
+
+/// The global node numbering of a distributed run: one contiguous range per process in rank
+/// order, each process's bodies in ascending order, each body's nodes in its mesh's order.
+/// Built from the owners and the node count of every body (a few numbers per body, which every
+/// process holds).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DistributedNumbering {
+    /// Global index of node 0 of every body.
+    pub body_start: Vec<usize>,
+    /// Nodes owned by each process.
+    pub rank_nodes: Vec<usize>,
+}
+
+impl DistributedNumbering {
+    pub fn new(owner: &[usize], body_nodes: &[usize], ranks: usize) -> Self {
+        let mut rank_nodes = vec![0; ranks];
+        for (&o, &n) in owner.iter().zip(body_nodes) {
+            rank_nodes[o] += n;
+        }
+        let mut next: Vec<usize> = rank_nodes.iter().scan(0, |at, &n| {
+            let s = *at;
+            *at += n;
+            Some(s)
+        }).collect();
+        let body_start = owner
+            .iter()
+            .zip(body_nodes)
+            .map(|(&o, &n)| {
+                let s = next[o];
+                next[o] += n;
+                s
+            })
+            .collect();
+        Self { body_start, rank_nodes }
+    }
+}
+
+/// Why a part cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PartError {
+    #[error("the ghost layer: {0}")]
+    Ghosts(#[from] partition::PartitionError),
+    #[error("the part's model: {0}")]
+    Model(#[from] ModelError),
+    #[error("the node map: {0}")]
+    Map(#[from] IndexMapError),
+    #[error("body owners: {0}")]
+    Owners(String),
+}
+
+/// One process's part of a distributed model (see the module docs).
+pub struct RankPart {
+    /// The process's model: its own bodies (ascending), then its ghosts (ascending), with the
+    /// whole model's facts ([`Model::part`]).
+    pub model: Model,
+    /// The body of the whole model each of the part's bodies is.
+    pub bodies: Vec<usize>,
+    /// How many of `bodies` (the first) this process owns.
+    pub n_owned_bodies: usize,
+    /// The owners and ghosts of the part's nodes (owned nodes first, in the global numbering's
+    /// order).
+    pub nodes: IndexMap,
+    /// The node and element of the whole model each of the part's nodes and elements is.
+    pub whole: PartMap,
+}
+
+impl RankPart {
+    /// This process's part of `whole`, whose bodies are owned by `owner` (every process's
+    /// owners alike), with the ghosts within `reach` of its bodies at coordinates `x` (every
+    /// node of `whole`). Collective.
+    ///
+    /// # Errors
+    /// Owners that do not name a process for every body, boxes that are not finite, or a
+    /// negative reach — on every process alike, as they all see the same input.
+    pub fn new(whole: &Model, x: &[[f64; 2]], owner: &[usize], reach: f64, comm: Arc<dyn Collective>) -> Result<Self, PartError> {
+        let (rank, size) = (comm.rank(), comm.size());
+        if owner.len() != whole.bodies.len() || owner.iter().any(|&o| o >= size) {
+            return Err(PartError::Owners(format!("{} owners for {} bodies on {size} processes (expected one process below {size} per body)", owner.len(), whole.bodies.len())));
+        }
+        let ghosts = ghost_bodies(&body_boxes(whole, x), owner, rank, reach)?;
+        let owned: Vec<usize> = (0..owner.len()).filter(|&b| owner[b] == rank).collect();
+        let body_nodes: Vec<usize> = whole.bodies.iter().map(|b| b.mesh.n_nodes()).collect();
+        let numbering = DistributedNumbering::new(owner, &body_nodes, size);
+        let ghost_nodes: Vec<usize> = ghosts.iter().flat_map(|&b| numbering.body_start[b]..numbering.body_start[b] + body_nodes[b]).collect();
+        let n_owned_nodes = numbering.rank_nodes[rank];
+        let nodes = IndexMap::new(comm, n_owned_nodes, ghost_nodes)?;
+        let bodies: Vec<usize> = owned.iter().chain(&ghosts).copied().collect();
+        let (model, map) = whole.part(&bodies, owned.len())?;
+        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map })
+    }
+
+    /// The part's slice of a vector of the whole model's nodes (`bs` values per node).
+    pub fn restrict(&self, whole: &[f64], bs: usize) -> Vec<f64> {
+        self.whole.node.iter().flat_map(|&n| whole[n * bs..(n + 1) * bs].iter().copied()).collect()
+    }
+
+    /// Whether each of the part's bodies is owned here (the owned ones come first).
+    pub fn owned_bodies(&self) -> Vec<bool> {
+        (0..self.bodies.len()).map(|k| k < self.n_owned_bodies).collect()
+    }
+
+    /// Whether each of the part's elements is on an owned body.
+    pub fn owned_elements(&self) -> Vec<bool> {
+        self.model.elem_body.iter().map(|&b| b < self.n_owned_bodies).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn boxed(x0: f64, y0: f64) -> partition::Particle {
+        partition::Particle { elements: 1, min: [x0, y0], max: [x0 + 1.0, y0 + 1.0] }
+    }
+
+    #[test]
+    fn ghosts_are_the_other_processes_bodies_within_reach() {
+        // a row of unit boxes 0.5 apart: 0 1 | 2 3 (owners 0 0 1 1)
+        let boxes: Vec<_> = (0..4).map(|i| boxed(1.5 * f64::from(i), 0.0)).collect();
+        let owner = [0, 0, 1, 1];
+        assert_eq!(ghost_bodies(&boxes, &owner, 0, 0.6).unwrap(), vec![2]);
+        assert_eq!(ghost_bodies(&boxes, &owner, 1, 0.6).unwrap(), vec![1]);
+        // out of reach: no ghosts; a reach past two gaps: the next but one too
+        assert!(ghost_bodies(&boxes, &owner, 0, 0.4).unwrap().is_empty());
+        assert_eq!(ghost_bodies(&boxes, &owner, 0, 2.1).unwrap(), vec![2, 3]);
+        assert!(ghost_bodies(&boxes, &owner, 0, -1.0).is_err());
+    }
+
+    #[test]
+    fn the_numbering_is_contiguous_per_process_in_rank_order() {
+        // bodies of 3, 4, 5, 6 nodes owned by 1, 0, 1, 0
+        let n = DistributedNumbering::new(&[1, 0, 1, 0], &[3, 4, 5, 6], 2);
+        assert_eq!(n.rank_nodes, vec![10, 8]);
+        assert_eq!(n.body_start, vec![10, 0, 13, 4]);
+    }
+}

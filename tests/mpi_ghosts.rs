@@ -1,0 +1,270 @@
+//! The owned + ghost state of a distributed run (`mpfem::parallel::part`,
+//! `mpfem::parallel::index_map`), on 4 real MPI processes: this test starts `mpirun -n 4` on its
+//! own test binary, whose processes (marked by `MPFEM_GHOST_CHILD`) each build their part of a
+//! 4 × 4 grid of elastic discs pressed together (every neighbour pair and every outer disc's
+//! wall within the barrier's d̂) and check:
+//!
+//! - no process holds the whole mesh: its node and element counts equal its owned + ghost
+//!   bodies' counts and are below the whole model's, and it has ghosts;
+//! - the ghost layer is complete and each pair is evaluated once: the internal force of the
+//!   owned elements plus the barrier gradient of the pairs whose first side is owned, summed
+//!   onto the owners by the reverse scatter, equals the whole model's on every owned node
+//!   (tolerance 1e-12 of the largest force: the same terms summed in another order); the
+//!   barrier energies and wall forces summed over the processes equal the whole model's
+//!   (1e-12 relative), and so does the smallest collision-free step fraction of a motion that
+//!   closes the gaps (exactly: the same pairs' times of impact);
+//! - the forward scatter gives every ghost node its owner's values exactly.
+//!
+//! The reference is the serial evaluation of the whole model on each process (it is small).
+#![cfg(feature = "mpi")]
+
+use mpfem::assembly::{number_equations, Assembler, ElementFields};
+use mpfem::contact::barrier_problem::BarrierEval;
+use mpfem::contact::geometry::Wall;
+use mpfem::element::{Volumetric, N_ENH};
+use mpfem::material::{ConstitutiveLaw, MatState, TimeIncrement};
+use mpfem::model::Model;
+use mpfem::parallel::part::RankPart;
+use mpfem::parallel::Collective;
+use std::sync::Arc;
+
+
+const CHILD: &str = "MPFEM_GHOST_CHILD";
+const RANKS: usize = 4;
+
+/// A deterministic pseudo-random number in [−1, 1) of `k` (a hash of it).
+fn noise(k: usize) -> f64 {
+    let mut z = (k as u64).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+/// The whole model, a displacement that brings every neighbour pair of discs within d̂ (each
+/// disc moved towards the die's centre and shrunk by 0.1 %, plus noise of d̂/100), and the
+/// walls moved onto the outermost nodes (their barrier's zero lies d̂/2 behind them).
+fn pressed_grid() -> (Model, Vec<f64>, Vec<Wall>) {
+    let (n, side, ratio, h) = (4, 100.0, 0.7, 3.0);
+    let text = mpfem::bench_support::disc_grid_case(n, side, ratio, h, "");
+    let case = mpfem::case::parse(&text, std::path::Path::new(".")).expect("case");
+    let model = Model::from_case(&case).expect("model");
+    let dhat = model.barrier_contact().expect("barrier").dhat;
+    let centre = [0.5 * side, 0.5 * side];
+    // the discs' centres and radius, and the gap between neighbours
+    let centres: Vec<[f64; 2]> = model
+        .bodies
+        .iter()
+        .map(|b| {
+            let nodes = &model.x0[b.node_offset..b.node_offset + b.mesh.n_nodes()];
+            let (lo, hi) = nodes.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])]));
+            [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+        })
+        .collect();
+    let pitch = side / n as f64;
+    let radius = {
+        let b = &model.bodies[0];
+        model.x0[b.node_offset..b.node_offset + b.mesh.n_nodes()].iter().map(|p| (p[0] - centres[0][0]).hypot(p[1] - centres[0][1])).fold(0.0, f64::max)
+    };
+    let shrink = 1e-3;
+    let displacement = |s: f64| {
+        let mut u = vec![0.0; model.n_dofs()];
+        for (b, body) in model.bodies.iter().enumerate() {
+            let c = centres[b];
+            for k in body.node_offset..body.node_offset + body.mesh.n_nodes() {
+                let p = model.x0[k];
+                for d in 0..2 {
+                    u[2 * k + d] = -s * (c[d] - centre[d]) - shrink * (p[d] - c[d]) + 0.01 * dhat * noise(2 * k + d);
+                }
+            }
+        }
+        u
+    };
+    // the smallest distance of a boundary node to another disc's boundary edge after moving
+    // the centres by the fraction s of their distance to the die's centre
+    let contact = model.barrier_contact().expect("barrier");
+    let gap = |s: f64| {
+        let x = coords(&model, &displacement(s));
+        let mut g = f64::INFINITY;
+        for &(node, body) in &contact.nodes {
+            for seg in contact.segments.iter().filter(|seg| seg.body != body) {
+                let (p, a, b) = (x[node], x[seg.nodes[0]], x[seg.nodes[1]]);
+                let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+                let t = ((ap[0] * ab[0] + ap[1] * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1])).clamp(0.0, 1.0);
+                g = g.min((ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1]));
+            }
+        }
+        g
+    };
+    // the first fraction that leaves the closest gap at d̂/2: scanned in steps that close the
+    // gaps by 0.01 mm from 0.3 mm apart on the line of the centres, then bisected (the gap is
+    // not monotone: once a vertex has passed another disc's edge it grows again)
+    let step = 0.01 / pitch;
+    let mut lo = (pitch - 2.0 * radius - 0.3) / pitch;
+    assert!(gap(lo) > 0.5 * dhat);
+    while gap(lo + step) > 0.5 * dhat {
+        lo += step;
+        assert!(lo < 1.0, "the discs never come within d̂/2");
+    }
+    let mut hi = lo + step;
+    for _ in 0..50 {
+        let mid = 0.5 * (lo + hi);
+        if gap(mid) > 0.5 * dhat {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let u = displacement(lo);
+    let x: Vec<[f64; 2]> = model.x0.iter().enumerate().map(|(k, p)| [p[0] + u[2 * k], p[1] + u[2 * k + 1]]).collect();
+    let walls = model
+        .wall_planes(0.0)
+        .into_iter()
+        .map(|w| {
+            let nn = w.normal[0].hypot(w.normal[1]);
+            let n = [w.normal[0] / nn, w.normal[1] / nn];
+            let depth = x.iter().map(|q| (q[0] - w.point[0]) * n[0] + (q[1] - w.point[1]) * n[1]).fold(f64::INFINITY, f64::min);
+            Wall { point: [w.point[0] + depth * n[0], w.point[1] + depth * n[1]], normal: w.normal }
+        })
+        .collect();
+    (model, u, walls)
+}
+
+/// Internal force of the elements `keep` (all when empty) at `u` from the reference state.
+fn element_forces(model: &Model, u: &[f64], keep: &[bool]) -> Vec<f64> {
+    let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
+    let (mut assembler, _kk) = Assembler::new(model, eq, n_free);
+    if !keep.is_empty() {
+        assembler.retain_elements(keep);
+    }
+    let ne = model.elements.len();
+    let vol: Vec<Volumetric> = model.elem_material.iter().map(|&m| Volumetric { kappa: model.materials[m].bulk_modulus().expect("compressible"), lambda: 0.0 }).collect();
+    let mut f = vec![0.0; model.n_dofs()];
+    let mut fields = ElementFields::new(ne);
+    assembler
+        .assemble(model, u, &vec![[MatState::default(); 4]; ne], &vec![[0.0; N_ENH]; ne], &vol, None, TimeIncrement { time: 0.0, dt: 1.0 }, None, &mut f, &mut fields, None)
+        .expect("assembly");
+    f
+}
+
+fn coords(model: &Model, u: &[f64]) -> Vec<[f64; 2]> {
+    model.x0.iter().enumerate().map(|(k, p)| [p[0] + u[2 * k], p[1] + u[2 * k + 1]]).collect()
+}
+
+/// One process's checks (see the module docs); returns a line for the parent.
+fn rank_work(comm: Arc<dyn Collective>) -> String {
+    let (rank, size) = (comm.rank(), comm.size());
+    assert_eq!(size, RANKS, "started on {RANKS} processes");
+    let (whole, u, walls) = pressed_grid();
+    // the whole model's references
+    let x = coords(&whole, &u);
+    let mut f_whole = element_forces(&whole, &u, &[]);
+    let mut barrier = whole.barrier_contact().expect("barrier");
+    let mut eval = BarrierEval::default();
+    barrier.evaluate(&x, &walls, false, &mut eval).expect("admissible");
+    eval.add_gradient(&mut f_whole);
+    let (dhat, h) = (barrier.dhat, whole.whole_facts().h_min);
+    // a motion that closes every gap (each node 0.6 d̂ towards the centre): its first impact
+    let x1: Vec<[f64; 2]> = x.iter().map(|p| [p[0] + 0.6 * dhat * (50.0 - p[0]).signum(), p[1] + 0.6 * dhat * (50.0 - p[1]).signum()]).collect();
+    let toi_whole = barrier.collision_free_step(&x, &x1, &walls, &walls);
+    assert!(eval.edges.len() + eval.quads.len() > 100 && eval.walls.len() > 10, "the pressed grid has {} pair terms and {} wall terms", eval.edges.len() + eval.quads.len(), eval.walls.len());
+    assert!(toi_whole < 1.0, "the motion closes a gap");
+
+    // this process's part: the METIS owners (rank 0's), ghosts within d̂ + h
+    let mut owner: Vec<f64> = mpfem::distribute::partition_particles(&whole, size).iter().map(|&o| o as f64).collect();
+    comm.broadcast(&mut owner);
+    let owner: Vec<usize> = owner.iter().map(|&o| o as usize).collect();
+    let part = RankPart::new(&whole, &x, &owner, dhat + h, comm.clone()).expect("part");
+    let m = &part.model;
+    let n_ghost_bodies = part.bodies.len() - part.n_owned_bodies;
+    let owned_nodes: usize = part.bodies[..part.n_owned_bodies].iter().map(|&b| whole.bodies[b].mesh.n_nodes()).sum();
+    let ghost_nodes: usize = part.bodies[part.n_owned_bodies..].iter().map(|&b| whole.bodies[b].mesh.n_nodes()).sum();
+    let part_elements: usize = part.bodies.iter().map(|&b| whole.bodies[b].mesh.n_elements()).sum();
+    assert!(n_ghost_bodies > 0, "rank {rank} has ghosts");
+    assert_eq!(m.n_nodes(), owned_nodes + ghost_nodes);
+    assert_eq!((part.nodes.n_owned(), part.nodes.n_local()), (owned_nodes, owned_nodes + ghost_nodes));
+    assert_eq!(m.elements.len(), part_elements);
+    assert!(m.n_nodes() < whole.n_nodes() && m.elements.len() < whole.elements.len(), "rank {rank} holds {} of {} nodes, {} of {} elements", m.n_nodes(), whole.n_nodes(), m.elements.len(), whole.elements.len());
+    assert_eq!(part.nodes.n_global(), whole.n_nodes());
+
+    // the distributed residual: owned elements, owned first sides, reverse scatter
+    let u_part = part.restrict(&u, 2);
+    let xp = coords(m, &u_part);
+    let mut f = element_forces(m, &u_part, &part.owned_elements());
+    let mut bp = m.barrier_contact().expect("barrier");
+    assert_eq!((bp.dhat, bp.kappa), (barrier.dhat, barrier.kappa), "d̂ and κ are the whole model's");
+    bp.evaluate_only(part.owned_bodies());
+    let mut ep = BarrierEval::default();
+    bp.evaluate(&xp, &walls, false, &mut ep).expect("admissible");
+    ep.add_gradient(&mut f);
+    part.nodes.reverse_add(&mut f, 2);
+    let scale = f_whole.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let mut worst = 0.0f64;
+    for i in 0..part.nodes.n_owned() {
+        let g = part.whole.node[i];
+        for d in 0..2 {
+            worst = worst.max((f[2 * i + d] - f_whole[2 * g + d]).abs());
+        }
+    }
+    assert!(worst <= 1e-12 * scale, "rank {rank}: owned residual differs by {worst:e} (largest force {scale:e})");
+    assert!(f[2 * part.nodes.n_owned()..].iter().all(|&v| v == 0.0), "the reverse scatter leaves the ghosts zero");
+    let mut sums = vec![ep.energy];
+    sums.extend_from_slice(&ep.wall_force);
+    comm.sum_in_place(&mut sums);
+    assert!((sums[0] - eval.energy).abs() <= 1e-12 * eval.energy.abs(), "barrier energy {} over the ranks, {} whole", sums[0], eval.energy);
+    for (w, (&a, &b)) in sums[1..].iter().zip(&eval.wall_force).enumerate() {
+        assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-300), "wall {w}: force {a} over the ranks, {b} whole");
+    }
+    let x1p: Vec<[f64; 2]> = part.whole.node.iter().map(|&g| x1[g]).collect();
+    let toi = -comm.max(-bp.collision_free_step(&xp, &x1p, &walls, &walls));
+    assert_eq!(toi, toi_whole, "collision-free step fraction over the ranks");
+
+    // forward: the ghosts take their owners' values (owned entries filled, ghosts garbage)
+    let mut v = vec![f64::NAN; 2 * part.nodes.n_local()];
+    for i in 0..part.nodes.n_owned() {
+        let g = part.whole.node[i];
+        v[2 * i..2 * i + 2].copy_from_slice(&u[2 * g..2 * g + 2]);
+    }
+    part.nodes.forward(&mut v, 2);
+    assert_eq!(v, u_part, "forward scatter gives every ghost its owner's value");
+    format!(
+        "rank {rank}: {} owned + {n_ghost_bodies} ghost bodies, {} of {} nodes, {} of {} elements, {} pair terms; residual {:.1e} of {scale:.3e}; energy {:.6e}; step fraction {toi}",
+        part.n_owned_bodies,
+        m.n_nodes(),
+        whole.n_nodes(),
+        m.elements.len(),
+        whole.elements.len(),
+        ep.edges.len() + ep.quads.len() + ep.walls.len(),
+        worst / scale,
+        sums[0]
+    )
+}
+
+#[test]
+fn owned_and_ghost_parts_on_four_processes() {
+    if std::env::var_os(CHILD).is_some() {
+        let comm = mpfem::parallel::launch();
+        let line = rank_work(comm);
+        println!("GHOSTS {line}");
+        return;
+    }
+    let exe = std::env::current_exe().expect("test binary");
+    let out = std::process::Command::new("mpirun")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_plm", "isolated")
+        .env(CHILD, "1")
+        .args(["--oversubscribe", "--bind-to", "none", "-n", &RANKS.to_string()])
+        .arg(exe)
+        .args(["--exact", "owned_and_ghost_parts_on_four_processes", "--nocapture", "--test-threads", "1"])
+        .output()
+        .expect("mpirun (scripts/setup.sh installs Open MPI)");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // (libtest's own "test … " may precede a report on its line)
+    let lines: Vec<&str> = stdout.lines().filter_map(|l| l.find("GHOSTS rank").map(|i| &l[i..])).collect();
+    for l in &lines {
+        eprintln!("{l}");
+    }
+    assert!(out.status.success(), "mpirun -n {RANKS}: {}\n{stdout}\n{}", out.status, String::from_utf8_lossy(&out.stderr));
+    assert_eq!(lines.len(), RANKS, "a report from every process:\n{stdout}");
+}
