@@ -13,7 +13,12 @@
 //!   barrier energies and wall forces summed over the processes equal the whole model's
 //!   (1e-12 relative), and so does the smallest collision-free step fraction of a motion that
 //!   closes the gaps (exactly: the same pairs' times of impact);
-//! - the forward scatter gives every ghost node its owner's values exactly.
+//! - the forward scatter gives every ghost node its owner's values exactly;
+//! - (feature `petsc`) the distributed tangent: each process assembles its owned elements'
+//!   and its pairs' terms (plus a diagonal shift on its own dofs) into the rows of its own and
+//!   its ghost equations, PETSc (MUMPS LDLᵀ) gets the ghost rows through their owners, and the
+//!   update of K du = −f on every local equation equals faer's LU of the whole model's
+//!   tangent to 1e-10 of its largest entry (two direct solves of the same system).
 //!
 //! The reference is the serial evaluation of the whole model on each process (it is small).
 #![cfg(feature = "mpi")]
@@ -227,8 +232,12 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
     }
     part.nodes.forward(&mut v, 2);
     assert_eq!(v, u_part, "forward scatter gives every ghost its owner's value");
+    #[cfg(feature = "petsc")]
+    let solve = distributed_solve(&whole, &u, &eval, &part, &u_part, &ep);
+    #[cfg(not(feature = "petsc"))]
+    let solve = String::new();
     format!(
-        "rank {rank}: {} owned + {n_ghost_bodies} ghost bodies, {} of {} nodes, {} of {} elements, {} pair terms; residual {:.1e} of {scale:.3e}; energy {:.6e}; step fraction {toi}",
+        "rank {rank}: {} owned + {n_ghost_bodies} ghost bodies, {} of {} nodes, {} of {} elements, {} pair terms; residual {:.1e} of {scale:.3e}; energy {:.6e}; step fraction {toi}{solve}",
         part.n_owned_bodies,
         m.n_nodes(),
         whole.n_nodes(),
@@ -238,6 +247,98 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
         worst / scale,
         sums[0]
     )
+}
+
+/// The diagonal shift of the tangents (N/mm per dof): holds the discs' free rotations.
+#[cfg(feature = "petsc")]
+const SHIFT: f64 = 1e3;
+
+/// The tangent of `model` at `u` (reference states): the elements `keep` (all when empty),
+/// the barrier terms of `eval` and [`SHIFT`] on the diagonal of the dofs `own` (the first
+/// `own` dofs); with the equation numbers of the dofs and −f on the free equations.
+#[cfg(feature = "petsc")]
+fn tangent(model: &Model, u: &[f64], eval: &BarrierEval, keep: &[bool], own: usize) -> (mpfem::linalg::CsrMatrix, Vec<usize>, Vec<f64>) {
+    let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
+    let (mut assembler, mut kk) = Assembler::new(model, eq.clone(), n_free);
+    let blocks: Vec<Vec<usize>> = eval.edges.iter().map(|e| e.dofs.to_vec()).chain(eval.quads.iter().map(|q| q.dofs.to_vec())).chain(eval.walls.iter().map(|w| vec![2 * w.node, 2 * w.node + 1])).collect();
+    assembler.set_terms(&mut kk, &blocks, &[]);
+    if !keep.is_empty() {
+        assembler.retain_elements(keep);
+    }
+    let ne = model.elements.len();
+    let vol: Vec<Volumetric> = model.elem_material.iter().map(|&m| Volumetric { kappa: model.materials[m].bulk_modulus().expect("compressible"), lambda: 0.0 }).collect();
+    let mut f = vec![0.0; model.n_dofs()];
+    let mut fields = ElementFields::new(ne);
+    assembler
+        .assemble(model, u, &vec![[MatState::default(); 4]; ne], &vec![[0.0; N_ENH]; ne], &vol, None, TimeIncrement { time: 0.0, dt: 1.0 }, Some(&mut kk), &mut f, &mut fields, None)
+        .expect("assembly");
+    let map = assembler.block_map(&kk, &blocks);
+    let hessians = eval.edges.iter().map(|e| e.term.hess.iter().flatten().copied().collect::<Vec<f64>>()).chain(eval.quads.iter().map(|q| q.term.hess.iter().flatten().copied().collect())).chain(eval.walls.iter().map(|w| w.term.hess.iter().flatten().copied().collect()));
+    for (i, h) in hessians.enumerate() {
+        map.add(&mut kk.values, i, &h);
+    }
+    let diagonal = assembler.diagonal_map(&kk);
+    for d in 0..own {
+        diagonal.add_entry(&mut kk.values, d, 0, 0, SHIFT);
+    }
+    eval.add_gradient(&mut f);
+    let mut b = vec![0.0; n_free];
+    for (d, &q) in eq.iter().enumerate() {
+        if q != mpfem::assembly::FIXED {
+            b[q] = -f[d];
+        }
+    }
+    (kk, eq, b)
+}
+
+/// The distributed tangent solved by PETSc against the whole one solved by faer (see the
+/// module docs); the report's tail.
+#[cfg(feature = "petsc")]
+fn distributed_solve(whole: &Model, u: &[f64], eval: &BarrierEval, part: &RankPart, u_part: &[f64], ep: &BarrierEval) -> String {
+    use mpfem::linalg::petsc::{make_rows, PartRows, Rows};
+    use mpfem::linalg::{make_solver, LinearSolverKind, SolverOptions};
+    let comm = part.nodes.comm_arc();
+    // the whole system, faer's LU
+    let (kw, eqw, bw) = tangent(whole, u, eval, &[], whole.n_dofs());
+    let mut lu = make_solver(&SolverOptions { kind: LinearSolverKind::Lu, ..Default::default() });
+    let mut xw = vec![0.0; bw.len()];
+    lu.analyze(&kw).expect("analyze");
+    lu.factor(&kw).expect("factor");
+    lu.solve(&kw, &bw, &mut xw).expect("solve");
+    // the part's rows: its own and its ghosts' (−f complete on its own equations after the
+    // reverse scatter of the forces)
+    let m = &part.model;
+    let (kp, eqp, _) = tangent(m, u_part, ep, &part.owned_elements(), 2 * part.nodes.n_owned());
+    let mut f = element_forces(m, u_part, &part.owned_elements());
+    ep.add_gradient(&mut f);
+    part.nodes.reverse_add(&mut f, 2);
+    let map = std::sync::Arc::new(part.equation_map(&eqp).expect("equation map"));
+    let n_local = map.n_local();
+    let mut b = vec![0.0; n_local];
+    let mut dof = vec![None; n_local];
+    for (d, &q) in eqp.iter().enumerate() {
+        if q != mpfem::assembly::FIXED {
+            b[q] = -f[d];
+            dof[q] = Some((m.x0[d / 2], d % 2));
+        }
+    }
+    assert_eq!(map.n_global(), bw.len(), "the free equations over the processes are the whole model's");
+    let _petsc = mpfem::linalg::petsc::start("").expect("PETSc");
+    let mut solver = make_rows(Some(Rows::Part(PartRows { map: map.clone(), dof })), true, 1e-10, 1000, 1e-8, comm.rank(), comm.size());
+    let mut x = vec![0.0; n_local];
+    solver.analyze(&kp).expect("analyze");
+    solver.factor(&kp).expect("factor");
+    solver.solve(&kp, &b, &mut x).expect("solve");
+    let scale = xw.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let mut worst = 0.0f64;
+    for (d, &q) in eqp.iter().enumerate() {
+        if q != mpfem::assembly::FIXED {
+            let g = 2 * part.whole.node[d / 2] + d % 2;
+            worst = worst.max((x[q] - xw[eqw[g]]).abs());
+        }
+    }
+    assert!(worst <= 1e-10 * scale, "rank {}: the distributed update differs from the whole one by {worst:e} (largest {scale:e})", comm.rank());
+    format!("; {} with {} local equations: update {:.1e} of {scale:.3e}", solver.name(), n_local, worst / scale)
 }
 
 #[test]

@@ -1,11 +1,15 @@
 //! The collective operations of the processes of a run (MPI ranks), behind one small trait
 //! ([`Collective`]): what the solver driver, the distributed linear solvers and the output
-//! need, and nothing else. [`Serial`] is one process (every operation the identity);
+//! need, and nothing else, and the index maps of distributed vectors ([`IndexMap`]: owned
+//! indices and ghosts, and the scatters between them). [`Serial`] is one process (every operation the identity);
 //! [`mpi::MpiCollective`] is MPI's world communicator (feature `mpi`). A leaf module: it
 //! knows nothing of the model or the physics, which never see it (parallelism is passed in).
 
+pub mod index_map;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+
+pub use index_map::{IndexMap, IndexMapError};
 
 use std::sync::Arc;
 

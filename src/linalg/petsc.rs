@@ -2,12 +2,19 @@
 //! `petsc`): every process takes part in each solve; the options database tunes it as every
 //! PETSc program is tuned (`[solver] petsc_options`, or `PETSC_OPTIONS`).
 //!
-//! The tangent comes to this solver whole on every process (the replicated model of the
-//! distributed runs, [`crate::parallel`]); each process hands PETSc only its own rows: the
+//! The tangent comes to this solver in one of two ways ([`Rows`]). Whole on every process (the
+//! replicated model of the distributed runs, [`crate::parallel`]): each process hands PETSc
+//! only its own rows: the
 //! global PETSc numbering puts the rows of each process's particles in one contiguous range,
 //! in rank order (the particles' owners after the METIS partition; the multiplier rows on rank
 //! 0), and the matrix is a distributed AIJ made once per sparsity pattern from those rows and
 //! refilled in place for every new tangent. The update is gathered whole onto every process.
+//! Or as a process's part ([`PartRows`]): the rows of its own equations and of its ghosts',
+//! numbered locally (its own first); the ghost rows — the contact terms its pairs add to
+//! other processes' equations — go to their owners, who add them to their own rows in rank
+//! order (the pattern once per sparsity pattern, the values at every factorisation), and the
+//! update comes back on the process's own equations and, through the forward scatter, its
+//! ghosts'.
 //!
 //! Defaults, which the options database overrides: MUMPS's distributed direct solve, its LDLᵀ
 //! for a symmetric tangent (whose inertia tells the barrier's descent whether the tangent is
@@ -31,6 +38,24 @@ pub struct RowLayout {
     /// The reference position and the direction (0: x, 1: y) of each row's dof; None for a
     /// multiplier row. The rigid-body modes of the near-null space are built from these.
     pub dof: Vec<Option<([f64; 2], usize)>>,
+}
+
+/// A process's part of the system ([`Rows::Part`]): the map of its equations (its own first,
+/// then its ghosts') and where each equation's dof is.
+#[derive(Clone)]
+pub struct PartRows {
+    pub map: std::sync::Arc<crate::comm::IndexMap>,
+    /// The reference position and the direction (0: x, 1: y) of each local equation's dof.
+    pub dof: Vec<Option<([f64; 2], usize)>>,
+}
+
+/// How the rows of the systems reach the solver (see the module docs).
+#[derive(Clone)]
+pub enum Rows {
+    /// The whole matrix on every process; these rows are each process's own.
+    Whole(RowLayout),
+    /// Each process's part: its own rows and its ghosts', in local numbers.
+    Part(PartRows),
 }
 
 /// The PETSc environment of a run: PETSc initialised with the run's options (so that options
@@ -63,13 +88,21 @@ pub const NOT_BUILT: &str = "this mpfem was built without PETSc (rebuild with `c
 /// initialisation if nobody made an [`Environment`], by the first `analyze`). Without the
 /// `petsc` feature its `analyze` fails with [`NOT_BUILT`].
 pub fn make(layout: Option<RowLayout>, symmetric: bool, rtol: f64, max_iterations: usize, singular_tol: f64, rank: usize, size: usize) -> Box<dyn LinearSolver> {
+    make_rows(layout.map(Rows::Whole), symmetric, rtol, max_iterations, singular_tol, rank, size)
+}
+
+/// [`make`] for rows given either way ([`Rows`]; None: the whole matrix, every row on rank 0).
+/// With [`Rows::Part`] the matrix, right-hand side and update of every call are the process's
+/// part (local equations, its own first): the right-hand side's own entries must be complete
+/// (its ghosts' are not read), and the update comes back on every local equation.
+pub fn make_rows(rows: Option<Rows>, symmetric: bool, rtol: f64, max_iterations: usize, singular_tol: f64, rank: usize, size: usize) -> Box<dyn LinearSolver> {
     #[cfg(feature = "petsc")]
     {
-        Box::new(imp::PetscSolver::new(layout, symmetric, rtol, max_iterations, singular_tol, rank, size))
+        Box::new(imp::PetscSolver::new(rows, symmetric, rtol, max_iterations, singular_tol, rank, size))
     }
     #[cfg(not(feature = "petsc"))]
     {
-        let _ = (layout, symmetric, rtol, max_iterations, singular_tol, rank, size);
+        let _ = (rows, symmetric, rtol, max_iterations, singular_tol, rank, size);
         Box::new(NotBuilt)
     }
 }
@@ -104,30 +137,37 @@ mod imp {
         LinalgError::Other(e.to_string())
     }
 
+    /// Where the values of the rows handed to PETSc come from.
+    enum Sources {
+        /// The whole matrix: PETSc's number of every row, this process's rows (mpfem numbers)
+        /// in PETSc's order, and for every entry of the local CSR handed to PETSc its position
+        /// in the tangent's values.
+        Whole { global: Vec<usize>, local_rows: Vec<usize>, source: Vec<usize> },
+        /// A part: the (entry, position in the part's values) of its own rows' values; per
+        /// process, the positions of the values of the ghost rows it owns, in the order they are
+        /// sent, and the entries the values received from it go to.
+        Part { map: std::sync::Arc<crate::comm::IndexMap>, own: Vec<(usize, usize)>, send: Vec<Vec<usize>>, recv: Vec<Vec<usize>> },
+    }
+
     /// The PETSc objects of one sparsity pattern.
     struct Pattern {
         pattern_id: u64,
-        /// PETSc's number of every row.
-        global: Vec<usize>,
-        /// This process's rows (mpfem numbers), in PETSc's order.
-        local_rows: Vec<usize>,
-        /// For every entry of the local CSR handed to PETSc, its position in the tangent's
-        /// values.
-        source: Vec<usize>,
+        sources: Sources,
         values: Vec<f64>,
         a: Matrix,
         ksp: Ksp,
         b: Vector,
         x: Vector,
         ax: Vector,
-        gather: GatherAll,
+        /// The update gathered whole (the whole matrix's rows only).
+        gather: Option<GatherAll>,
         direct: bool,
         name: String,
         inertia_warned: bool,
     }
 
     pub(super) struct PetscSolver {
-        layout: Option<RowLayout>,
+        rows: Option<Rows>,
         symmetric: bool,
         rtol: f64,
         max_iterations: usize,
@@ -139,8 +179,8 @@ mod imp {
     }
 
     impl PetscSolver {
-        pub(super) fn new(layout: Option<RowLayout>, symmetric: bool, rtol: f64, max_iterations: usize, singular_tol: f64, rank: usize, size: usize) -> Self {
-            Self { layout, symmetric, rtol, max_iterations, singular_tol, rank, size, pattern: None, definite: None }
+        pub(super) fn new(rows: Option<Rows>, symmetric: bool, rtol: f64, max_iterations: usize, singular_tol: f64, rank: usize, size: usize) -> Self {
+            Self { rows, symmetric, rtol, max_iterations, singular_tol, rank, size, pattern: None, definite: None }
         }
 
         fn build(&self, a: &CsrMatrix) -> Result<Pattern, LinalgError> {
@@ -149,59 +189,22 @@ mod imp {
             if (r, s) != (self.rank, self.size) {
                 return Err(LinalgError::Other(format!("PETSc runs on {s} process(es) (this is its rank {r}) but the run on {} (rank {})", self.size, self.rank)));
             }
-            let n = a.nrows;
-            let whole = RowLayout { owner: vec![0; n], dof: vec![None; n] };
-            let layout = self.layout.as_ref().unwrap_or(&whole);
-            if layout.owner.len() != n || layout.dof.len() != n {
-                return Err(LinalgError::Other(format!("the row layout has {} rows, the matrix {n}", layout.owner.len())));
-            }
-            if let Some(&o) = layout.owner.iter().find(|&&o| o >= self.size) {
-                return Err(LinalgError::Other(format!("a row owned by process {o} of {}", self.size)));
-            }
-            // PETSc's numbering: each process's rows in one range, in rank order, each range in
-            // mpfem's order
-            let mut count = vec![0usize; self.size];
-            for &o in &layout.owner {
-                count[o] += 1;
-            }
-            let mut next: Vec<usize> = count.iter().scan(0, |s, &c| {
-                let start = *s;
-                *s += c;
-                Some(start)
-            }).collect();
-            let mut global = vec![0usize; n];
-            let mut local_rows = Vec::with_capacity(count[self.rank]);
-            for (i, &o) in layout.owner.iter().enumerate() {
-                global[i] = next[o];
-                next[o] += 1;
-                if o == self.rank {
-                    local_rows.push(i);
-                }
-            }
-            // this process's rows in CSR with PETSc's column numbers, ascending in each row
-            let mut row_ptr = Vec::with_capacity(local_rows.len() + 1);
-            row_ptr.push(0);
-            let (mut cols, mut source) = (Vec::new(), Vec::new());
-            let mut row: Vec<(usize, usize)> = Vec::new();
-            for &i in &local_rows {
-                row.clear();
-                row.extend((a.row_ptr[i]..a.row_ptr[i + 1]).map(|k| (global[a.col_idx[k]], k)));
-                row.sort_unstable();
-                cols.extend(row.iter().map(|e| e.0));
-                source.extend(row.iter().map(|e| e.1));
-                row_ptr.push(cols.len());
-            }
-            let values: Vec<f64> = source.iter().map(|&k| a.values[k]).collect();
-            let mut m = Matrix::from_local_csr(n, &row_ptr, &cols, &values).map_err(err)?;
+            let (mut m, sources, dofs) = match &self.rows {
+                Some(Rows::Part(part)) => self.part_rows(a, part)?,
+                whole => self.whole_rows(a, match whole {
+                    Some(Rows::Whole(l)) => Some(l),
+                    _ => None,
+                })?,
+            };
             if self.symmetric {
                 m.set_symmetric().map_err(err)?;
             }
             // the rigid-body modes of the plane, for algebraic multigrid
             let mut modes = Vec::with_capacity(3);
             for mode in 0..3 {
-                let v: Vec<f64> = local_rows
+                let v: Vec<f64> = dofs
                     .iter()
-                    .map(|&i| match layout.dof[i] {
+                    .map(|d| match d {
                         None => 0.0,
                         Some((p, c)) => match (mode, c) {
                             (0, 0) | (1, 1) => 1.0,
@@ -245,8 +248,152 @@ mod imp {
             let b = Vector::like_rows(&m).map_err(err)?;
             let x = Vector::like_rows(&m).map_err(err)?;
             let ax = Vector::like_rows(&m).map_err(err)?;
-            let gather = GatherAll::new(&x).map_err(err)?;
-            Ok(Pattern { pattern_id: a.pattern_id, global, local_rows, source, values, a: m, ksp, b, x, ax, gather, direct, name, inertia_warned: false })
+            let gather = if matches!(sources, Sources::Whole { .. }) { Some(GatherAll::new(&x).map_err(err)?) } else { None };
+            let values = vec![0.0; sources_len(&sources)];
+            Ok(Pattern { pattern_id: a.pattern_id, sources, values, a: m, ksp, b, x, ax, gather, direct, name, inertia_warned: false })
+        }
+
+        /// The matrix of this process's rows of the whole matrix `a`, the sources of its values,
+        /// and its rows' dofs.
+        fn whole_rows(&self, a: &CsrMatrix, layout: Option<&RowLayout>) -> Result<(Matrix, Sources, Vec<Option<([f64; 2], usize)>>), LinalgError> {
+            let n = a.nrows;
+            let whole = RowLayout { owner: vec![0; n], dof: vec![None; n] };
+            let layout = layout.unwrap_or(&whole);
+            if layout.owner.len() != n || layout.dof.len() != n {
+                return Err(LinalgError::Other(format!("the row layout has {} rows, the matrix {n}", layout.owner.len())));
+            }
+            if let Some(&o) = layout.owner.iter().find(|&&o| o >= self.size) {
+                return Err(LinalgError::Other(format!("a row owned by process {o} of {}", self.size)));
+            }
+            // PETSc's numbering: each process's rows in one range, in rank order, each range in
+            // mpfem's order
+            let mut count = vec![0usize; self.size];
+            for &o in &layout.owner {
+                count[o] += 1;
+            }
+            let mut next: Vec<usize> = count.iter().scan(0, |s, &c| {
+                let start = *s;
+                *s += c;
+                Some(start)
+            }).collect();
+            let mut global = vec![0usize; n];
+            let mut local_rows = Vec::with_capacity(count[self.rank]);
+            for (i, &o) in layout.owner.iter().enumerate() {
+                global[i] = next[o];
+                next[o] += 1;
+                if o == self.rank {
+                    local_rows.push(i);
+                }
+            }
+            // this process's rows in CSR with PETSc's column numbers, ascending in each row
+            let mut row_ptr = Vec::with_capacity(local_rows.len() + 1);
+            row_ptr.push(0);
+            let (mut cols, mut source) = (Vec::new(), Vec::new());
+            let mut row: Vec<(usize, usize)> = Vec::new();
+            for &i in &local_rows {
+                row.clear();
+                row.extend((a.row_ptr[i]..a.row_ptr[i + 1]).map(|k| (global[a.col_idx[k]], k)));
+                row.sort_unstable();
+                cols.extend(row.iter().map(|e| e.0));
+                source.extend(row.iter().map(|e| e.1));
+                row_ptr.push(cols.len());
+            }
+            let values: Vec<f64> = source.iter().map(|&k| a.values[k]).collect();
+            let m = Matrix::from_local_csr(n, &row_ptr, &cols, &values).map_err(err)?;
+            let dofs = local_rows.iter().map(|&i| layout.dof[i]).collect();
+            Ok((m, Sources::Whole { global, local_rows, source }, dofs))
+        }
+
+        /// The matrix of this process's own rows of a part `a` (local equations, its own first,
+        /// then its ghosts'): its own rows and the ghost rows the other processes send it, merged
+        /// (the pattern goes to the owners here, once per pattern).
+        fn part_rows(&self, a: &CsrMatrix, part: &PartRows) -> Result<(Matrix, Sources, Vec<Option<([f64; 2], usize)>>), LinalgError> {
+            let map = &part.map;
+            let (n_own, n_local) = (map.n_owned(), map.n_local());
+            if a.nrows != n_local || part.dof.len() != n_local {
+                return Err(LinalgError::Other(format!("the part has {n_local} equations and {} dofs, the matrix {} rows", part.dof.len(), a.nrows)));
+            }
+            let start = map.start();
+            // the ghost rows' patterns to their owners: [row, count, columns…] per row, global
+            let mut out = vec![Vec::new(); self.size];
+            let mut send = vec![Vec::new(); self.size];
+            for i in n_own..n_local {
+                let o = map.ghost_owners()[i - n_own];
+                let (lo, hi) = (a.row_ptr[i], a.row_ptr[i + 1]);
+                out[o].push(map.global(i) as f64);
+                out[o].push((hi - lo) as f64);
+                for k in lo..hi {
+                    out[o].push(map.global(a.col_idx[k]) as f64);
+                    send[o].push(k);
+                }
+            }
+            let got = map.comm().exchange(&out);
+            // every entry of the own rows: (row, column, where from: own k, or (process, index))
+            enum From {
+                Own(usize),
+                Sent(usize, usize),
+            }
+            let mut entries: Vec<(usize, usize, From)> = Vec::new();
+            for i in 0..n_own {
+                for k in a.row_ptr[i]..a.row_ptr[i + 1] {
+                    entries.push((i, map.global(a.col_idx[k]), From::Own(k)));
+                }
+            }
+            for (q, buf) in got.iter().enumerate() {
+                let (mut at, mut index) = (0, 0);
+                while at < buf.len() {
+                    let (row, count) = (buf[at] as usize, buf[at + 1] as usize);
+                    if !(start..start + n_own).contains(&row) || at + 2 + count > buf.len() {
+                        return Err(LinalgError::Other(format!("process {q} sent row {row}, which is not one of this process's {start}..{}", start + n_own)));
+                    }
+                    for c in &buf[at + 2..at + 2 + count] {
+                        entries.push((row - start, *c as usize, From::Sent(q, index)));
+                        index += 1;
+                    }
+                    at += 2 + count;
+                }
+            }
+            entries.sort_by_key(|e| (e.0, e.1));
+            let mut row_ptr = vec![0usize; n_own + 1];
+            let mut cols = Vec::new();
+            let mut own = Vec::new();
+            let mut recv: Vec<Vec<usize>> = got.iter().map(|_| Vec::new()).collect();
+            let mut received: Vec<Vec<(usize, usize)>> = got.iter().map(|_| Vec::new()).collect();
+            let mut last = None;
+            for (row, col, from) in entries {
+                // (the same entry again is one more source of its value)
+                if last != Some((row, col)) {
+                    cols.push(col);
+                    row_ptr[row + 1] += 1;
+                    last = Some((row, col));
+                }
+                let e = cols.len() - 1;
+                match from {
+                    From::Own(k) => own.push((e, k)),
+                    From::Sent(q, index) => received[q].push((index, e)),
+                }
+            }
+            for r in 0..n_own {
+                row_ptr[r + 1] += row_ptr[r];
+            }
+            for (q, list) in received.iter_mut().enumerate() {
+                list.sort_unstable();
+                recv[q] = list.iter().map(|&(_, e)| e).collect();
+            }
+            let mut values = vec![0.0; cols.len()];
+            for &(e, k) in &own {
+                values[e] += a.values[k];
+            }
+            let m = Matrix::from_local_csr(map.n_global(), &row_ptr, &cols, &values).map_err(err)?;
+            let dofs = part.dof[..n_own].to_vec();
+            Ok((m, Sources::Part { map: map.clone(), own, send, recv }, dofs))
+        }
+    }
+
+    fn sources_len(s: &Sources) -> usize {
+        match s {
+            Sources::Whole { source, .. } => source.len(),
+            Sources::Part { own, recv, .. } => own.iter().map(|e| e.0 + 1).chain(recv.iter().flatten().map(|e| e + 1)).max().unwrap_or(0),
         }
     }
 
@@ -262,11 +409,33 @@ mod imp {
 
         fn factor(&mut self, a: &CsrMatrix) -> Result<(), LinalgError> {
             let p = self.pattern.as_mut().ok_or(LinalgError::NotAnalyzed)?;
-            if p.pattern_id != a.pattern_id || p.source.last().is_some_and(|&k| k >= a.values.len()) {
+            if p.pattern_id != a.pattern_id {
                 return Err(LinalgError::NotAnalyzed);
             }
-            for (v, &k) in p.values.iter_mut().zip(&p.source) {
-                *v = a.values[k];
+            match &p.sources {
+                Sources::Whole { source, .. } => {
+                    if source.last().is_some_and(|&k| k >= a.values.len()) {
+                        return Err(LinalgError::NotAnalyzed);
+                    }
+                    for (v, &k) in p.values.iter_mut().zip(source) {
+                        *v = a.values[k];
+                    }
+                }
+                Sources::Part { map, own, send, recv } => {
+                    // the ghost rows' values to their owners; the own rows' values, then what
+                    // every process sent, in rank order
+                    let out: Vec<Vec<f64>> = send.iter().map(|ks| ks.iter().map(|&k| a.values[k]).collect()).collect();
+                    let got = map.comm().exchange(&out);
+                    p.values.iter_mut().for_each(|v| *v = 0.0);
+                    for &(e, k) in own {
+                        p.values[e] += a.values[k];
+                    }
+                    for (es, vals) in recv.iter().zip(&got) {
+                        for (&e, &v) in es.iter().zip(vals) {
+                            p.values[e] += v;
+                        }
+                    }
+                }
             }
             self.definite = None;
             p.a.update_values(&p.values).map_err(err)?;
@@ -289,7 +458,10 @@ mod imp {
         fn solve(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
             check_vectors(a.nrows, b, x)?;
             let p = self.pattern.as_mut().ok_or(LinalgError::NotAnalyzed)?;
-            let local: Vec<f64> = p.local_rows.iter().map(|&i| b[i]).collect();
+            let local: Vec<f64> = match &p.sources {
+                Sources::Whole { local_rows, .. } => local_rows.iter().map(|&i| b[i]).collect(),
+                Sources::Part { map, .. } => b[..map.n_owned()].to_vec(),
+            };
             p.b.set_local(&local).map_err(err)?;
             let info = p.ksp.solve(&p.b, &mut p.x).map_err(err)?;
             // ‖b − A x‖ / ‖b‖ over every process
@@ -307,9 +479,18 @@ mod imp {
             if p.direct && rel > self.singular_tol {
                 return Err(LinalgError::Singular(format!("{}: relative residual {rel:.3e} after the direct solve", p.name)));
             }
-            let all = p.gather.gather(&p.x).map_err(err)?;
-            for (xi, &g) in x.iter_mut().zip(&p.global) {
-                *xi = all[g];
+            match &p.sources {
+                Sources::Whole { global, .. } => {
+                    let all = p.gather.as_mut().ok_or(LinalgError::NotAnalyzed)?.gather(&p.x).map_err(err)?;
+                    for (xi, &g) in x.iter_mut().zip(global) {
+                        *xi = all[g];
+                    }
+                }
+                Sources::Part { map, .. } => {
+                    let own = p.x.local().map_err(err)?;
+                    x[..own.len()].copy_from_slice(&own);
+                    map.forward(x, 1);
+                }
             }
             Ok(SolveStats { iterations: info.iterations.max(1), relative_residual: rel })
         }

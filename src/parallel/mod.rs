@@ -46,10 +46,9 @@
 //! owners moves no data: it only changes who assembles which elements (and who owns which
 //! Schwarz blocks). The figures go to the log and to `summary.json` ([`PartitionStats`]).
 
-pub mod index_map;
 pub mod part;
 
-pub use crate::comm::{launch, Collective, Serial};
+pub use crate::comm::{launch, Collective, IndexMap, Serial};
 
 use crate::assembly::{AssemblyError, ElementFields};
 use crate::contact::problem::Eval;

@@ -12,8 +12,7 @@
 //! part's local numbering puts its owned nodes first in that order and its ghosts' nodes after
 //! them, and an [`IndexMap`] moves values between the owners and the ghosts.
 
-use super::index_map::{IndexMap, IndexMapError};
-use crate::comm::Collective;
+use crate::comm::{Collective, IndexMap, IndexMapError};
 use crate::model::{Model, ModelError, PartMap};
 use std::sync::Arc;
 
@@ -107,6 +106,8 @@ pub enum PartError {
     Map(#[from] IndexMapError),
     #[error("body owners: {0}")]
     Owners(String),
+    #[error("the part's equations: {0}")]
+    Equations(String),
 }
 
 /// One process's part of a distributed model (see the module docs).
@@ -153,6 +154,45 @@ impl RankPart {
     /// The part's slice of a vector of the whole model's nodes (`bs` values per node).
     pub fn restrict(&self, whole: &[f64], bs: usize) -> Vec<f64> {
         self.whole.node.iter().flat_map(|&n| whole[n * bs..(n + 1) * bs].iter().copied()).collect()
+    }
+
+    /// The map of the part's free equations, for equation numbers `eq` of its dofs (2 per
+    /// node; [`crate::assembly::FIXED`] for a prescribed dof) that number the free dofs in dof
+    /// order (as [`crate::assembly::number_equations`] does): its own equations are then the
+    /// first, and each process's are a contiguous range of the global equations in rank
+    /// order. Collective.
+    ///
+    /// # Errors
+    /// `eq` of another length than the part's dofs (on this process; the others complete the
+    /// call), or a ghost equation its owner does not know.
+    pub fn equation_map(&self, eq: &[usize]) -> Result<IndexMap, PartError> {
+        use crate::assembly::FIXED;
+        let comm = self.nodes.comm_arc();
+        let n_dofs = 2 * self.nodes.n_local();
+        let ok = eq.len() == n_dofs;
+        let n_own_dofs = 2 * self.nodes.n_owned();
+        let n_own = if ok { eq[..n_own_dofs].iter().filter(|&&q| q != FIXED).count() } else { 0 };
+        let counts = comm.all_gather_varcount(&[n_own as f64]);
+        let start: usize = counts[..comm.rank()].iter().map(|&c| c as usize).sum();
+        // every dof's global equation (−1: prescribed), the ghosts' from their owners
+        let mut global: Vec<f64> = (0..n_dofs).map(|d| if d < n_own_dofs && ok && eq[d] != FIXED { (start + eq[d]) as f64 } else { -1.0 }).collect();
+        self.nodes.forward(&mut global, 2);
+        let mut problem = (!ok).then(|| format!("{} equation numbers for the part's {n_dofs} dofs", eq.len()));
+        let mut ghosts = Vec::new();
+        for d in (n_own_dofs..n_dofs).filter(|_| ok) {
+            match (eq[d] != FIXED, global[d] >= 0.0) {
+                (true, true) if eq[d] == n_own + ghosts.len() => ghosts.push(global[d] as usize),
+                (true, true) => problem = problem.or(Some(format!("ghost dof {d} has equation {}, expected {} (the free dofs numbered in dof order)", eq[d], n_own + ghosts.len()))),
+                (false, false) => {}
+                (free, _) => problem = problem.or(Some(format!("ghost dof {d} is {} here but not on its owner", if free { "free" } else { "prescribed" }))),
+            }
+        }
+        // (every process makes the map, so that none waits for one that failed)
+        let map = IndexMap::new(comm, n_own, if problem.is_none() { ghosts } else { Vec::new() });
+        match problem {
+            Some(p) => Err(PartError::Equations(p)),
+            None => Ok(map?),
+        }
     }
 
     /// Whether each of the part's bodies is owned here (the owned ones come first).

@@ -15,9 +15,10 @@
 //!
 //! The lists of what goes where are agreed once, when the map is made (one exchange of the
 //! ghosts' global indices with their owners); each scatter is then one
-//! [`Collective::exchange`].
+//! [`Collective::exchange`]. (A leaf like the rest of `comm`: it knows indices, not nodes; a
+//! process's part of a model, [`crate::parallel::part`], makes the map of its nodes.)
 
-use crate::comm::Collective;
+use super::Collective;
 use std::sync::Arc;
 
 /// Why an index map cannot be made.
@@ -96,6 +97,16 @@ impl IndexMap {
             return Err(e);
         }
         Ok(Self { comm, ranges, ghosts, ghost_owner, send, recv })
+    }
+
+    /// The processes of the map.
+    pub fn comm(&self) -> &dyn Collective {
+        self.comm.as_ref()
+    }
+
+    /// The processes of the map, to share.
+    pub fn comm_arc(&self) -> Arc<dyn Collective> {
+        self.comm.clone()
     }
 
     /// Indices owned here.
