@@ -783,7 +783,7 @@ impl BarrierContact {
     /// Every node–edge pair (of different particles) closer than `reach` at `x`, sorted.
     pub fn candidates(&mut self, x: &[[f64; 2]], reach: f64) -> Vec<(usize, usize)> {
         self.search.update(x);
-        let mut pairs = self.search.pairs(x, &self.nodes, reach);
+        let mut pairs = self.search.pairs(x, self.first_nodes(), reach);
         if self.quad_points > 0 {
             let edges: Vec<(usize, usize)> = pairs.iter().flat_map(|&(node, s)| self.vertex_segments[node].iter().map(move |&e| (e, s))).collect();
             pairs.extend(edges.into_iter().map(|(e, s)| (self.edge_key(e), s)));

@@ -144,6 +144,12 @@ pub trait LinearSolver: Send {
         self.factor(a)?;
         Ok(self.definite() != Some(false))
     }
+    /// A solver of a process's part of a distributed matrix: the absolute row sums
+    /// Σ_j |A_ij| of the whole rows of this process's own equations, as last factored (the
+    /// rows of a part hold only the process's own terms). None for the other solvers.
+    fn own_row_abs_sums(&self) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// `a` is square and its CSR arrays are consistent (what every `analyze` checks first).

@@ -146,7 +146,7 @@ mod imp {
         /// A part: the (entry, position in the part's values) of its own rows' values; per
         /// process, the positions of the values of the ghost rows it owns, in the order they are
         /// sent, and the entries the values received from it go to.
-        Part { map: std::sync::Arc<crate::comm::IndexMap>, own: Vec<(usize, usize)>, send: Vec<Vec<usize>>, recv: Vec<Vec<usize>> },
+        Part { map: std::sync::Arc<crate::comm::IndexMap>, own: Vec<(usize, usize)>, send: Vec<Vec<usize>>, recv: Vec<Vec<usize>>, row_ptr: Vec<usize> },
     }
 
     /// The PETSc objects of one sparsity pattern.
@@ -386,7 +386,7 @@ mod imp {
             }
             let m = Matrix::from_local_csr(map.n_global(), &row_ptr, &cols, &values).map_err(err)?;
             let dofs = part.dof[..n_own].to_vec();
-            Ok((m, Sources::Part { map: map.clone(), own, send, recv }, dofs))
+            Ok((m, Sources::Part { map: map.clone(), own, send, recv, row_ptr }, dofs))
         }
     }
 
@@ -421,7 +421,7 @@ mod imp {
                         *v = a.values[k];
                     }
                 }
-                Sources::Part { map, own, send, recv } => {
+                Sources::Part { map, own, send, recv, .. } => {
                     // the ghost rows' values to their owners; the own rows' values, then what
                     // every process sent, in rank order
                     let out: Vec<Vec<f64>> = send.iter().map(|ks| ks.iter().map(|&k| a.values[k]).collect()).collect();
@@ -501,6 +501,16 @@ mod imp {
 
         fn definite(&self) -> Option<bool> {
             self.definite
+        }
+
+        fn own_row_abs_sums(&self) -> Option<Vec<f64>> {
+            match &self.pattern.as_ref()?.sources {
+                Sources::Part { row_ptr, .. } => {
+                    let values = &self.pattern.as_ref()?.values;
+                    Some(row_ptr.windows(2).map(|w| values[w[0]..w[1]].iter().map(|v| v.abs()).sum()).collect())
+                }
+                Sources::Whole { .. } => None,
+            }
         }
     }
 }

@@ -1,6 +1,22 @@
 //! Distributed runs: the collective operations the solver driver needs, behind one small trait,
 //! and the bookkeeping of which process owns which work.
 //!
+//! Two ways to run on several processes:
+//! - **Owned + ghost parts** ([`part`], `Simulation::new_part`): each process holds its own
+//!   particles and, as ghosts, the other processes' particles within the contact reach of
+//!   them ([`part::RankPart`], its nodes numbered own-first with an [`IndexMap`] over them);
+//!   it evaluates its own elements and the barrier pairs whose first side is its own
+//!   (`BarrierContact::evaluate_only`), the forces its pairs put on ghosts go to their owners
+//!   (the reverse scatter) and come back summed (the forward scatter), every norm, dot
+//!   product, energy, extremum and collision-free step fraction is reduced over the processes,
+//!   and PETSc assembles the distributed tangent from each process's own and ghost rows
+//!   (`linalg::petsc::Rows::Part`) and solves it. No process holds the whole mesh or state.
+//!   For now: the barrier contact without ties, quasi-statics, no re-meshing, the ghosts chosen
+//!   when the part is made (a step fails naming the bodies when they no longer cover the
+//!   contacts), and the library's API only (the command line runs the replicated model).
+//!   `tests/mpi_parts_run.rs` holds it to the whole serial run on 1–4 processes.
+//! - **The replicated model** (what `mpfem run` under `mpirun` does, below).
+//!
 //! The model is replicated on every process (each builds the same [`Model`] from the case);
 //! the work is distributed: every process owns whole particles (a METIS partition of the
 //! particle graph, [`crate::distribute::partition_particles`]) and evaluates the element

@@ -124,6 +124,10 @@ pub struct RankPart {
     pub nodes: IndexMap,
     /// The node and element of the whole model each of the part's nodes and elements is.
     pub whole: PartMap,
+    /// The whole model's equation number of each of the part's dofs (its free dofs numbered
+    /// in dof order, [`crate::assembly::number_equations`]; [`crate::assembly::FIXED`] for a
+    /// prescribed dof): where a quantity defined on the whole model's equations is read.
+    pub whole_eq: Vec<usize>,
 }
 
 impl RankPart {
@@ -148,7 +152,9 @@ impl RankPart {
         let nodes = IndexMap::new(comm, n_owned_nodes, ghost_nodes)?;
         let bodies: Vec<usize> = owned.iter().chain(&ghosts).copied().collect();
         let (model, map) = whole.part(&bodies, owned.len())?;
-        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map })
+        let (eq, _) = crate::assembly::number_equations(whole.n_dofs(), whole.loading.prescribed.iter().map(|p| p.dof));
+        let whole_eq = map.node.iter().flat_map(|&n| [eq[2 * n], eq[2 * n + 1]]).collect();
+        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq })
     }
 
     /// The part's slice of a vector of the whole model's nodes (`bs` values per node).

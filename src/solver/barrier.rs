@@ -209,9 +209,13 @@ impl BarrierRun {
 impl Simulation {
     /// The pattern's barrier blocks become `pairs` (sorted); the positions of every block
     /// follow when the pattern changes.
+    ///
+    /// On a part every process calls this (the pattern of the distributed matrix changes when
+    /// any process's does, and all analyse it again together).
     pub(super) fn set_barrier_pattern(&mut self, pairs: Vec<(usize, usize)>) -> Result<(), NewtonFailure> {
         let Some(b) = self.barrier.as_mut() else { return Ok(()) };
-        if pairs == b.pattern && b.pattern.len() == self.sys.maps.pairs.len() {
+        let same = pairs == b.pattern && b.pattern.len() == self.sys.maps.pairs.len();
+        if !self.sys.any(!same) {
             return Ok(());
         }
         b.pattern = pairs;
@@ -219,7 +223,7 @@ impl Simulation {
         let sys = &mut self.sys;
         let changed = sys.assembler.set_terms(&mut sys.kk, &dofs, &[]);
         sys.maps.pairs = sys.assembler.block_map(&sys.kk, &dofs);
-        if changed {
+        if sys.any(changed) {
             sys.r.resize(sys.kk.nrows, 0.0);
             sys.du.resize(sys.kk.nrows, 0.0);
             sys.locate_fixed_terms(&self.model, &b.node_dofs);
@@ -250,21 +254,81 @@ impl Simulation {
         b.tie_gap = f64::INFINITY;
         let near = b.contact.candidates(&x_n, reach);
         let pairs = b.with_ties(near);
+        self.check_ghosts(&x_n, reach)?;
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
         // the barrier at the converged state, with κ as the last commit left it: the friction
         // of this step is lagged there, and the springs' directions are chosen from it (the
         // last evaluation is not that state after a failed attempt: its friction pairs could
         // lie outside the pattern)
         let walls_n = b.walls0.clone();
-        b.contact.evaluate(&x_n, &walls_n, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()))?;
+        let evaluated = b.contact.evaluate(&x_n, &walls_n, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()));
+        self.sys.agree_part(evaluated, "the barrier met a contact at the converged state")?;
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
         b.friction = if b.has_friction() { b.eval.friction_pairs(&b.contact, &x_n, &b.walls0, b.mu, &b.mu_walls) } else { Vec::new() };
         self.set_barrier_pattern(pairs)?;
         // the springs of this step: every dof, or only the directions the barrier pairs of the
         // last converged state do not hold
         let n_bodies = self.model.bodies.len();
         let b = self.barrier.as_ref().expect("barrier");
-        let held = || b.eval.body_support(&b.contact, &b.walls0, n_bodies);
+        let sys = &self.sys;
+        let held = || {
+            let held = b.eval.body_support(&b.contact, &b.walls0, n_bodies);
+            let Some(p) = &sys.part else { return held };
+            // a part's pairs hold its bodies and its ghosts; the other processes' pairs hold
+            // them too: the holds of every process, on the whole model's bodies
+            let n_whole = self.model.whole_facts().n_bodies;
+            let mut all = vec![0.0; 2 * n_whole];
+            for (k, h) in held.iter().enumerate() {
+                for c in 0..2 {
+                    if h[c] {
+                        all[2 * p.bodies[k] + c] = 1.0;
+                    }
+                }
+            }
+            sys.comm.sum_in_place(&mut all);
+            p.bodies.iter().map(|&g| [all[2 * g] > 0.0, all[2 * g + 1] > 0.0]).collect()
+        };
         self.springs.prepare(&self.model.stabilisation, &self.sol.u, &self.u_prev, dt, self.run.dt_prev, self.time.dt, held);
         Ok(())
+    }
+
+    /// On a part: that its ghosts still hold every other process's body within `reach` of
+    /// one of its own at `x` (the boxes of every process's bodies, gathered). The ghosts are
+    /// chosen when the part is made; a body that comes within reach of one that is not its
+    /// ghost would miss pairs, so the step fails naming them (rebuilding the part during a
+    /// run is not done yet). Nothing to check without a part.
+    fn check_ghosts(&self, x: &[[f64; 2]], reach: f64) -> Result<(), NewtonFailure> {
+        let Some(p) = &self.sys.part else { return Ok(()) };
+        // (global body, box) of its own bodies, then every process's
+        let mut mine = Vec::with_capacity(5 * p.own_bodies);
+        for (k, b) in self.model.bodies.iter().take(p.own_bodies).enumerate() {
+            let (lo, hi) = x[b.node_offset..b.node_offset + b.mesh.n_nodes()].iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), q| ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])]));
+            mine.extend_from_slice(&[p.bodies[k] as f64, lo[0], lo[1], hi[0], hi[1]]);
+        }
+        let all = self.sys.comm.all_gather_varcount(&mine);
+        let n = self.model.whole_facts().n_bodies;
+        let mut boxes = vec![partition::Particle { elements: 0, min: [0.0; 2], max: [0.0; 2] }; n];
+        let mut known = vec![false; n];
+        for r in all.chunks_exact(5) {
+            let b = r[0] as usize;
+            if b < n {
+                boxes[b] = partition::Particle { elements: 1, min: [r[1], r[2]], max: [r[3], r[4]] };
+                known[b] = true;
+            }
+        }
+        let mut local = vec![false; n];
+        for &g in &p.bodies {
+            local[g] = true;
+        }
+        let missing = match partition::particle_graph(&boxes, partition::Adjacency::Proximity { gap: reach }) {
+            Ok(graph) => p.bodies[..p.own_bodies].iter().find_map(|&a| graph.neighbors(a).iter().find(|&&c| known[c] && !local[c]).map(|&c| (a, c))),
+            Err(e) => return self.sys.agree_part(Err(NewtonFailure::Contact(format!("the ghost layer's check: {e}"))), "the ghost layer's check failed"),
+        };
+        let r = match missing {
+            Some((a, c)) => Err(NewtonFailure::Contact(format!("body {c} came within {reach:.3e} mm of body {a} of process {} but is not one of its ghosts (the part's ghosts are chosen when it is made)", self.sys.comm.rank()))),
+            None => Ok(()),
+        };
+        self.sys.agree_part(r, "a ghost layer no longer covers its contacts")
     }
 
     /// The barrier terms at coordinates `x` (the walls where they are in the step): evaluated,
@@ -275,11 +339,14 @@ impl Simulation {
         let _t = self.clock.scope(Phase::ContactAssembly);
         let Some(b) = self.barrier.as_mut() else { return Ok(()) };
         let walls = b.walls_at(b.alpha);
-        b.contact.evaluate(x, &walls, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()))?;
+        let evaluated = b.contact.evaluate(x, &walls, PROJECT, &mut b.eval).map_err(|e| NewtonFailure::Contact(e.to_string()));
+        // (a part: every process learns whether any met a contact, and whether any pattern grows)
+        self.sys.agree_part(evaluated, "the barrier met a contact")?;
+        let Some(b) = self.barrier.as_mut() else { return Ok(()) };
         if tangent {
             let c = &b.contact;
             let missing: Vec<(usize, usize)> = b.eval.edges.iter().map(|e| (e.node, e.segment)).chain(b.eval.quads.iter().map(|q| (c.edge_key(q.edge), q.segment))).filter(|p| b.pattern.binary_search(p).is_err()).collect();
-            if !missing.is_empty() {
+            if self.sys.any(!missing.is_empty()) {
                 // (with every pair within d̂ + h of this iterate, as at the start of a step, so
                 // that the next iterates seldom grow it again: each growth assembles the
                 // pattern anew and analyses it again, 10 % of a 256-polygon compaction when
@@ -309,6 +376,11 @@ impl Simulation {
             let t = fp.term(u, &self.sol.u, eps);
             energy += t.energy;
             slope += (0..fp.width).map(|i| t.grad[i] * du[fp.dofs[i]]).sum::<f64>();
+        }
+        if self.sys.part.is_some() {
+            let mut v = [energy, slope];
+            self.sys.comm.sum_in_place(&mut v);
+            [energy, slope] = v;
         }
         Some((energy, slope))
     }
@@ -437,7 +509,7 @@ impl Simulation {
         let x0 = self.coords(u0);
         let x1 = self.coords(u1);
         let Some(b) = self.barrier.as_ref() else { return 1.0 };
-        b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1))
+        self.sys.min(b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1)))
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged
@@ -466,6 +538,8 @@ impl Simulation {
                 change = change.max(*v);
             }
         }
+        let (change, scale) = (self.sys.max(change), self.sys.max(scale));
+        let Some(b) = self.barrier.as_mut() else { return false };
         let again = change > FRICTION_TOL * scale;
         if again && updates >= MAX_FRICTION_UPDATES {
             tracing::warn!(change = change / scale.max(f64::MIN_POSITIVE), "lagged friction not converged after the allowed updates");
@@ -680,6 +754,8 @@ impl Simulation {
         if from_root && self.sys.par.is_some() {
             self.sys.comm.broadcast(&mut flag);
         }
+        // (a part: definite when it is so on every process)
+        flag[0] = self.sys.min(flag[0]);
         if let Some(b) = self.barrier.as_mut() {
             b.definite = flag[0] > 0.5;
         }
@@ -690,7 +766,7 @@ impl Simulation {
     /// are left: a wall's distance is linear in the node's position, so their Hessians are
     /// positive semi-definite already.
     pub(super) fn project_pair_hessians(&mut self) {
-        if !self.sys.comm.is_root() {
+        if !self.sys.comm.is_root() && self.sys.part.is_none() {
             return;
         }
         let _t = self.clock.scope(Phase::ContactAssembly);
@@ -725,14 +801,21 @@ impl Simulation {
     /// zero; raising it by |K_ii| left the tangent indefinite at τ = 1 (and a zero pivot of the
     /// indefinite fallback failed the step outright, measured).
     pub(super) fn shift_until_definite(&mut self, start: f64, tau_max: f64) -> Option<f64> {
-        let pos = self.sys.kk.diagonal_positions();
+        let mut pos = self.sys.kk.diagonal_positions();
+        // (a part shifts its own equations' diagonal; its rows hold its own terms only, so
+        // their sums are a lower bound of the whole rows')
+        pos.truncate(self.sys.own_eqs());
         let d0: Vec<f64> = pos.iter().map(|p| p.map_or(0.0, |p| self.sys.kk.values[p])).collect();
         // each diagonal entry is raised by τ times twice its row's absolute sum: at τ = 1 the
         // matrix is strictly diagonally dominant with a positive diagonal (Gershgorin), so
         // positive definite, also where a diagonal entry itself is near zero or negative (a
         // barrier pair's negative curvature for sliding past a corner)
         let kk = &self.sys.kk;
-        let scale: Vec<f64> = (0..pos.len()).map(|i| 2.0 * kk.values[kk.row_ptr[i]..kk.row_ptr[i + 1]].iter().map(|v| v.abs()).sum::<f64>()).collect();
+        let scale: Vec<f64> = match self.sys.part.as_ref().and(self.sys.linear.own_row_abs_sums()) {
+            // (a part: the whole rows, as the solver merged them at the last factorisation)
+            Some(sums) => sums.iter().map(|s| 2.0 * s).collect(),
+            None => (0..pos.len()).map(|i| 2.0 * kk.values[kk.row_ptr[i]..kk.row_ptr[i + 1]].iter().map(|v| v.abs()).sum::<f64>()).collect(),
+        };
         let mut tau = start;
         while tau <= tau_max * (1.0 + 1e-9) {
             for ((p, d), s) in pos.iter().zip(&d0).zip(&scale) {
@@ -812,6 +895,7 @@ impl Simulation {
             }
         }
         let d = b.eval.min_distance;
+        let d = if self.sys.part.is_some() { -self.sys.comm.max(-d) } else { d };
         if d < 1e-3 * b.contact.dhat && d < b.min_distance && b.contact.kappa < 1e4 * b.kappa0 {
             b.contact.kappa *= 2.0;
             tracing::debug!(kappa = b.contact.kappa, min_distance = d, "barrier stiffness doubled");

@@ -178,8 +178,64 @@ impl Simulation {
     /// are kept unless their imbalance on the new model is above `[solver]
     /// repartition_imbalance` (see [`Distribution::build`]).
     fn build(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>) -> Result<Self, SolveError> {
+        Self::build_with(model, time, spec, comm, previous, None)
+    }
+
+    /// The simulation of this process's part of a distributed model (the owned + ghost state,
+    /// [`crate::parallel::part::RankPart`]): it holds the meshes and states of its own
+    /// particles and of its ghosts only, evaluates the elements of its own particles and the
+    /// barrier pairs whose first side is on one of them, and solves with PETSc over the
+    /// processes (see [`crate::parallel`]). Every process of the part's map calls this.
+    ///
+    /// For now a part takes the barrier contact without ties (frictionless or with friction),
+    /// quasi-statics and no re-meshing; anything else is refused by name.
+    ///
+    /// # Errors
+    /// What the part cannot take (above), or what [`Simulation::new`] refuses.
+    pub fn new_part(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
+        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, .. } = part;
+        let unsupported = if model.contact.method != crate::contact::ContactMethod::Barrier {
+            Some("a contact method other than the barrier")
+        } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
+            Some("cohering particles (the barrier's ties)")
+        } else if model.remesh.enabled {
+            Some("re-meshing")
+        } else if time.integrator != crate::dynamics::Integrator::Static {
+            Some("implicit dynamics")
+        } else {
+            None
+        };
+        if let Some(what) = unsupported {
+            return Err(SolveError::Contact(format!("a distributed part does not take {what} yet")));
+        }
+        let (eq, _) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
+        let comm = nodes.comm_arc();
+        let part = crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole: Default::default(), whole_eq: Vec::new() };
+        let eqs = part.equation_map(&eq).map_err(|e| SolveError::Linear(LinalgError::Other(e.to_string())))?;
+        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, .. } = part;
+        let own_dofs = 2 * nodes.n_owned();
+        let own_eqs = eqs.n_owned();
+        // the whole model's equation of each of the part's equations
+        let mut eq_whole = vec![0; eqs.n_local()];
+        for (d, &q) in eq.iter().enumerate() {
+            if q != FIXED {
+                eq_whole[q] = whole_eq.get(d).copied().unwrap_or(FIXED);
+            }
+        }
+        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole };
+        Self::build_with(model, time, spec, comm, None, Some(sys))
+    }
+
+    fn build_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>, part: Option<system::PartSys>) -> Result<Self, SolveError> {
         let mut partition = previous.map_or_else(PartitionStats::default, |p| p.1.clone());
-        let par = Distribution::build(&model, comm.clone(), previous.and_then(|p| p.0), spec.repartition_imbalance, &mut partition);
+        let par = if part.is_some() {
+            partition.ranks = comm.size();
+            None
+        } else {
+            Distribution::build(&model, comm.clone(), previous.and_then(|p| p.0), spec.repartition_imbalance, &mut partition)
+        };
+        // (a part: whether each of its bodies is its own)
+        let own_body: Vec<bool> = (0..model.bodies.len()).map(|b| part.as_ref().is_none_or(|p| b < p.own_bodies)).collect();
         let n_dofs = model.n_dofs();
         let (eq, n_free) = number_equations(n_dofs, model.loading.prescribed.iter().map(|p| p.dof));
         let mut contact = model.contact_problem();
@@ -207,6 +263,10 @@ impl Simulation {
             0.0
         };
         let mut barrier = model.barrier_contact().map(|c| barrier::BarrierRun::new(c, h, mu_of(&model.contact.kind), model.contact.walls.iter().map(mu_of).collect(), tie_stiffness));
+        if let (Some(b), Some(_)) = (barrier.as_mut(), part.as_ref()) {
+            // a part evaluates the pairs whose first side is its own
+            b.contact.evaluate_only(own_body.clone());
+        }
         if let Some(b) = barrier.as_mut() {
             // cohering particles that touch (or nearly) at the start are tied at once
             if tie_stiffness > 0.0 {
@@ -224,7 +284,11 @@ impl Simulation {
             b.walls0 = b.walls1.clone();
             // the barrier starts from boundaries apart: where two touch it is infinite
             let mut eval = crate::contact::barrier_problem::BarrierEval::default();
-            if let Err(e) = b.contact.evaluate(&model.x0, &b.walls0, false, &mut eval) {
+            let start = b.contact.evaluate(&model.x0, &b.walls0, false, &mut eval);
+            if part.is_some() && comm.max(if start.is_err() { 1.0 } else { 0.0 }) > 0.0 && start.is_ok() {
+                return Err(SolveError::Contact("the barrier contact found touching particles at the start on another process".into()));
+            }
+            if let Err(e) = start {
                 return Err(SolveError::Contact(format!(
                     "{e} at the start: the barrier contact (contact.method = \"barrier\", the default) needs the particles apart from each other at the start (walls may touch them); expected a gap between particles, `contact = \"cohering\"` (touching particles are tied), or contact.method = \"penalty\" or \"augmented_lagrangian\""
                 )));
@@ -233,11 +297,23 @@ impl Simulation {
         if let Some(p) = &par {
             assembler.retain_elements(&p.owned_elements);
         }
+        if part.is_some() {
+            let own: Vec<bool> = model.elem_body.iter().map(|&b| own_body[b]).collect();
+            assembler.retain_elements(&own);
+        }
         let maps = TermMaps { pairs: assembler.block_map(&kk, &pair_dofs), multipliers: assembler.multiplier_map(&kk, &multiplier_dofs), ..Default::default() };
         // stabilisation springs ζ E a / h² on every dof of a contact problem
         let body_h: Vec<f64> = model.bodies.iter().map(|b| b.contact_h).collect();
         let body_nodes: Vec<_> = model.bodies.iter().map(|b| b.node_offset..b.node_offset + b.mesh.nodes.len()).collect();
-        let springs = Springs::new(&model.x0, &model.elements, &model.elem_body, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some() || barrier.is_some());
+        // (a part's springs on its own particles: a ghost's are its owner's)
+        let spring_elements: Vec<usize> = (0..model.elements.len()).filter(|&e| own_body[model.elem_body[e]]).collect();
+        let springs = if part.is_some() {
+            let els: Vec<[usize; 4]> = spring_elements.iter().map(|&e| model.elements[e]).collect();
+            let eb: Vec<usize> = spring_elements.iter().map(|&e| model.elem_body[e]).collect();
+            Springs::new(&model.x0, &els, &eb, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some() || barrier.is_some())
+        } else {
+            Springs::new(&model.x0, &model.elements, &model.elem_body, &body_e, &body_h, &body_nodes, &model.stabilisation, contact.is_some() || barrier.is_some())
+        };
         let n_walls = model.loading.walls.len();
         let symmetric = model.symmetric_tangent();
         let kind = spec.linear.resolve(symmetric);
@@ -256,7 +332,7 @@ impl Simulation {
         let schwarz = kind == LinearSolverKind::Pcg && spec.preconditioner == crate::linalg::Preconditioner::Schwarz;
         // (PETSc: every process solves its own rows)
         let petsc = kind == LinearSolverKind::Petsc;
-        let distributed_solve = par.is_some() && (schwarz || petsc);
+        let distributed_solve = (par.is_some() && (schwarz || petsc)) || part.is_some();
         let mut subdomains = crate::linalg::schwarz::Subdomains::default();
         if schwarz {
             let eq = &assembler.eq;
@@ -265,7 +341,17 @@ impl Simulation {
                 subdomains = subdomains.with_owners(&p.body_owner, comm.rank());
             }
         }
-        let mut linear = if petsc {
+        let mut linear = if let Some(p) = &part {
+            // a part's rows: its own and its ghosts' equations, PETSc over the processes
+            let mut dof = vec![None; kk.nrows];
+            for (d, &q) in assembler.eq.iter().enumerate() {
+                if q != FIXED {
+                    dof[q] = Some((model.x0[d / 2], d % 2));
+                }
+            }
+            let rows = crate::linalg::petsc::Rows::Part(crate::linalg::petsc::PartRows { map: p.eqs.clone(), dof });
+            crate::linalg::petsc::make_rows(Some(rows), symmetric, spec.pcg_tol, spec.pcg_max_iterations, singular_tol, comm.rank(), comm.size())
+        } else if petsc {
             // each row to its particle's owner (the multiplier rows to rank 0), with its dof's
             // reference position and direction for the rigid-body modes
             let n_rows = kk.nrows;
@@ -287,8 +373,9 @@ impl Simulation {
             make_solver_with(&opts, subdomains, comm.clone())
         };
         // (a failure on the solving process fails every process)
-        let analyzed = if n_free > 0 && (comm.is_root() || distributed_solve) { linear.analyze(&kk) } else { Ok(()) };
-        if par.is_some() && comm.max(if analyzed.is_err() { 1.0 } else { 0.0 }) > 0.0 {
+        let n_free_all = part.as_ref().map_or(n_free, |p| p.eqs.n_global());
+        let analyzed = if n_free_all > 0 && (comm.is_root() || distributed_solve) { linear.analyze(&kk) } else { Ok(()) };
+        if (par.is_some() || part.is_some()) && comm.max(if analyzed.is_err() { 1.0 } else { 0.0 }) > 0.0 {
             analyzed?;
             return Err(LinalgError::Other("symbolic analysis failed on rank 0".into()).into());
         }
@@ -313,7 +400,12 @@ impl Simulation {
             }
         }
         let area0_body = model.body_areas(&model.x0);
-        let area0_total: f64 = area0_body.iter().sum();
+        let mut area0_total: f64 = area0_body.iter().zip(&own_body).filter(|(_, &o)| o).map(|(a, _)| a).sum();
+        if part.is_some() {
+            // (the whole model's figures, the same on every process)
+            area0_total = comm.all_gather_varcount(&[area0_total]).iter().sum();
+            g_max = comm.max(g_max);
+        }
         // forces below this are round-off: G · L · 1e-13 with L = √(total area)
         let force_floor = 1e-13 * g_max * area0_total.abs().sqrt();
         if let Some(b) = barrier.as_mut() {
@@ -321,7 +413,10 @@ impl Simulation {
             // too (its round-off held the near-rigid ellipses of the paper's section 4,
             // ν = 0.5, at a relative residual of 3e-5 with updates of 1e-14 mm, measured); the
             // other methods, and compressible particles, keep G (their results unchanged)
-            let k_max = kappa.iter().zip(&incompressible).filter(|(_, &i)| i).map(|(&k, _)| k).fold(g_max, f64::max);
+            let mut k_max = kappa.iter().zip(&incompressible).filter(|(_, &i)| i).map(|(&k, _)| k).fold(g_max, f64::max);
+            if part.is_some() {
+                k_max = comm.max(k_max);
+            }
             b.stiffness_floor = 1e-13 * k_max * area0_total.abs().sqrt();
             b.load_floor = if e_min.is_finite() { barrier::LOAD_FLOOR * e_min * area0_total.abs().sqrt() } else { 0.0 };
         }
@@ -346,6 +441,7 @@ impl Simulation {
             par,
             partition,
             distributed_solve,
+            part,
         };
         sys.locate_fixed_terms(&model, &node_dofs);
         let run = RunState {
@@ -634,7 +730,7 @@ impl Simulation {
     pub(super) fn check_interrupt(&self) -> Result<(), NewtonFailure> {
         let Some(flag) = &self.interrupt else { return Ok(()) };
         let mut asked = [flag.load(std::sync::atomic::Ordering::SeqCst) as f64];
-        if self.sys.par.is_some() {
+        if self.sys.par.is_some() || self.sys.part.is_some() {
             self.sys.comm.broadcast(&mut asked);
         }
         if asked[0] != 0.0 {

@@ -173,10 +173,12 @@ impl Simulation {
             // augmented Lagrangian on the element area of incompressible bodies
             let mut worst: f64 = 0.0;
             for e in 0..self.incompressible.len() {
-                if self.incompressible[e] {
+                // (a part: its own elements, the others' are theirs)
+                if self.incompressible[e] && self.sys.part.as_ref().is_none_or(|p| self.model.elem_body[e] < p.own_bodies) {
                     worst = worst.max((self.sys.trial_fields.theta[e] - 1.0).abs());
                 }
             }
+            let worst = self.sys.max(worst);
             let contact_update = (self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
                 && updates < self.model.contact.max_augmentations)
                 || self.update_barrier_friction(&u, updates)
@@ -244,7 +246,8 @@ impl Simulation {
         let n_free = self.sys.assembler.n_free;
         let mut residuals = Vec::new();
         let mut rnorm = self.evaluate(u, inc, vol, true)?;
-        if n_free == 0 {
+        // (a part: the free equations of every process)
+        if self.sys.part.as_ref().map_or(n_free, |p| p.eqs.n_global()) == 0 {
             return Ok((0, 0.0));
         }
         self.factor_descent()?;
@@ -323,10 +326,10 @@ impl Simulation {
             let r_true = self.barrier.is_some().then(|| self.sys.r.clone());
             self.add_wall_motion();
             self.solve_linear()?;
-            let energy = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum::<f64>().abs();
+            let energy = self.sys.dot(&self.sys.du, &self.sys.r).abs();
             // with the barrier: the slope of the incremental potential along the update is
             // −R(u)·Δu (R = −∇Π), positive g0 = R·Δu for a descent direction
-            let g0 = r_true.as_ref().map_or(0.0, |r| self.sys.du.iter().zip(r).map(|(a, b)| a * b).sum::<f64>());
+            let g0 = r_true.as_ref().map_or(0.0, |r| self.sys.dot(&self.sys.du, r));
             if k == 0 {
                 e0 = energy.max(f64::MIN_POSITIVE);
             }
@@ -348,11 +351,14 @@ impl Simulation {
             // stiffness); `tangent` is the path's direction at the point tried (the update
             // itself where nothing turns)
             let turns = if self.barrier.as_ref().is_some_and(|b| b.turn) { self.body_turns(&u0, &du_full) } else { Vec::new() };
+            // (a part: whether a particle turns on any process, so that all take the same path
+            // through the line search; a process without turns takes straight lines on it)
+            let turning = self.sys.any(!turns.is_empty());
             let mut tangent = du_full.clone();
             let (eta_max, alpha0, tries) = match self.barrier.as_ref() {
                 Some(b) => {
                     let alpha0 = b.alpha;
-                    let limit = if turns.is_empty() {
+                    let limit = if !turning {
                         self.barrier_step_limit(&u0, &du_full)
                     } else {
                         let mut u1 = u0.clone();
@@ -392,7 +398,7 @@ impl Simulation {
             // whether the last point tried was left unevaluated (its path crossed a contact)
             let mut crossed = false;
             for _ in 0..tries {
-                if turns.is_empty() {
+                if !turning {
                     for d in 0..u.len() {
                         u[d] = u0[d] + eta * du_full[d];
                     }
@@ -414,7 +420,7 @@ impl Simulation {
                 match self.evaluate(u, inc, vol, full) {
                     Ok(rn) => {
                         // accept when the residual norm or the energy |Δu·R(η)| decreased
-                        let s: f64 = self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum::<f64>().abs();
+                        let s: f64 = self.sys.dot(&self.sys.du, &self.sys.r).abs();
                         // With the barrier, while the walls still move with the step, a
                         // residual that does not grow is enough (a free motion has a zero
                         // residual). Once they have arrived, a descent direction (g0 > 0) must
@@ -428,10 +434,11 @@ impl Simulation {
                         // `factor_descent`) and a change of the potential below round-off.
                         let better = rn.is_finite()
                             && if barrier {
-                                let slope: f64 = if turns.is_empty() {
-                                    self.sys.du.iter().zip(&self.sys.r).map(|(a, b)| a * b).sum()
+                                let slope: f64 = if !turning {
+                                    self.sys.dot(&self.sys.du, &self.sys.r)
                                 } else {
-                                    self.sys.assembler.eq.iter().zip(&tangent).filter(|(&q, _)| q != FIXED).map(|(&q, t)| t * self.sys.r[q]).sum()
+                                    let own = self.sys.own_dofs();
+                                    self.sys.sum(self.sys.assembler.eq[..own].iter().zip(&tangent).filter(|(&q, _)| q != FIXED).map(|(&q, t)| t * self.sys.r[q]).sum())
                                 };
                                 let line = line0.zip(self.contact_potential(u, &tangent)).map(|((energy0, slope0), (energy, slope))| BarrierLine { energy0, slope0, energy, slope });
                                 alpha0 < 1.0 || barrier_descent(eta, g0, slope, line) || (rn <= r_old && (g0 <= 0.0 || within_round_off(eta, g0, slope, line)))
@@ -449,7 +456,7 @@ impl Simulation {
                     Err(_) => eta *= 0.5,
                 }
             }
-            last_update = du_full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            last_update = self.sys.max(du_full.iter().fold(0.0f64, |m, v| m.max(v.abs())));
             if let Some(b) = self.barrier.as_ref() {
                 tracing::debug!(eta, eta_max, alpha = b.alpha, accepted, g0, min_distance = b.eval.min_distance, last_update, "barrier line search");
             }
@@ -576,7 +583,7 @@ impl Simulation {
     /// dofs (which includes the reactions), never below round-off (with the barrier, never
     /// below the load floor 1e-2 E L of an assembly that carries nothing yet, `barrier::LOAD_FLOOR`).
     pub(super) fn reference_force(&self) -> f64 {
-        let n = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let n = |v: &[f64]| self.sys.norm_dofs(v);
         let load = self.barrier.as_ref().map_or(0.0, |b| b.load_floor);
         n(&self.sys.f_ext).max(n(&self.sys.f_int)).max(self.sys.f_elem_norm).max(self.run.force_floor).max(load)
     }

@@ -77,7 +77,7 @@ impl Simulation {
                     dir[d] = v[q];
                 }
             }
-            let big = dir.chunks(2).map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt()).fold(0.0, f64::max);
+            let big = self.sys.max(dir.chunks(2).map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt()).fold(0.0, f64::max));
             if big <= 0.0 || !big.is_finite() {
                 break;
             }
@@ -124,24 +124,41 @@ impl Simulation {
     fn negative_curvature(&mut self, departure: usize) -> Option<Vec<f64>> {
         // the unshifted tangent, for the Rayleigh quotients
         let k_exact = self.sys.kk.clone();
-        let diag: Vec<f64> = k_exact.diagonal();
+        let mut diag: Vec<f64> = k_exact.diagonal();
+        if let Some(p) = &self.sys.part {
+            // the whole diagonal of its own equations: every process's terms
+            p.eqs.reverse_add(&mut diag, 1);
+        }
         let tau = self.shift_until_definite(super::barrier::SHIFT_MIN, 1.0)?;
         let n = self.sys.r.len();
         let n_free = self.sys.assembler.n_free;
         let mut x = vec![0.0; n];
         let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
-        for v in x.iter_mut().take(n_free) {
+        let mut next = || {
             seed ^= seed << 13;
             seed ^= seed >> 7;
             seed ^= seed << 17;
-            *v = (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        match &self.sys.part {
+            None => x.iter_mut().take(n_free).for_each(|v| *v = next()),
+            Some(p) => {
+                // the whole model's start, each equation's value read at its whole equation
+                let whole: Vec<f64> = (0..p.eqs.n_global()).map(|_| next()).collect();
+                for (v, &q) in x.iter_mut().zip(&p.eq_whole) {
+                    *v = whole.get(q).copied().unwrap_or(0.0);
+                }
+            }
         }
+        // (a part: its own equations' sums, and xᵀKx from every process's own terms, its
+        // ghosts' included: K is the sum of the parts')
+        let own = self.sys.own_eqs();
         let mut kx = vec![0.0; n];
         let (mut rq, mut rel) = (0.0, 0.0);
         let mut its = 0;
         for it in 0..INVERSE_ITERATIONS {
             its = it + 1;
-            let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let norm = self.sys.sum(x[..own].iter().map(|v| v * v).sum::<f64>()).sqrt();
             if !(norm > 0.0) || !norm.is_finite() {
                 return None;
             }
@@ -151,9 +168,9 @@ impl Simulation {
             self.solve_linear().ok()?;
             x.copy_from_slice(&self.sys.du);
             k_exact.mul_vec(&x, &mut kx);
-            let xx: f64 = x.iter().map(|v| v * v).sum();
-            let xkx: f64 = x.iter().zip(&kx).map(|(a, b)| a * b).sum();
-            let xdx: f64 = x.iter().zip(&diag).map(|(a, d)| a * a * d.abs()).sum();
+            let xx: f64 = self.sys.sum(x[..own].iter().map(|v| v * v).sum());
+            let xkx: f64 = self.sys.sum(x.iter().zip(&kx).map(|(a, b)| a * b).sum());
+            let xdx: f64 = self.sys.sum(x[..own].iter().zip(&diag).map(|(a, d)| a * a * d.abs()).sum());
             let mut q = [xkx / xx, xkx / xdx];
             if self.sys.par.is_some() {
                 self.sys.comm.broadcast(&mut q);

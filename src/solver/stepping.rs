@@ -368,7 +368,7 @@ impl Simulation {
     pub(super) fn commit(&mut self, dt: f64, trial: Trial, cutbacks: usize) -> StepReport {
         // work done against the stabilisation springs over the step (their force at the end of
         // the step times the increment)
-        self.springs.energy += self.springs.work(&trial.u, &self.sol.u);
+        self.springs.energy += self.sys.sum(self.springs.work(&trial.u, &self.sol.u));
         if self.contact.is_some() {
             let x = self.coords(&trial.u);
             if let Some(c) = self.contact.as_mut() {
@@ -389,14 +389,18 @@ impl Simulation {
         self.run.total_iterations += trial.iterations;
         let x = self.coords(&self.sol.u);
         let areas = self.model.body_areas(&x);
-        let total: f64 = areas.iter().sum();
+        // (a part: its own bodies, and the sums and extremes over the processes)
+        let own_bodies = self.sys.part.as_ref().map_or(areas.len(), |p| p.own_bodies);
+        let total: f64 = self.sys.sum(areas[..own_bodies].iter().sum());
         let volume_error = ((total - self.run.area0_total) / self.run.area0_total).abs();
-        let volume_error_max_body = areas
-            .iter()
-            .zip(&self.run.area0_body)
-            .map(|(a, a0)| ((a - a0) / a0).abs())
-            .fold(0.0, f64::max);
-        let reactions = self
+        let volume_error_max_body = self.sys.max(
+            areas[..own_bodies]
+                .iter()
+                .zip(&self.run.area0_body)
+                .map(|(a, a0)| ((a - a0) / a0).abs())
+                .fold(0.0, f64::max),
+        );
+        let reactions: Vec<[f64; 2]> = self
             .model
             .reaction_groups
             .iter()
@@ -421,10 +425,22 @@ impl Simulation {
                         m[c] += self.sol.u[2 * n + c];
                     }
                 }
-                let k = g.nodes.len().max(1) as f64;
-                [m[0] / k, m[1] / k]
+                let k = self.sys.sum(g.nodes.len() as f64).max(1.0);
+                [self.sys.sum(m[0]) / k, self.sys.sum(m[1]) / k]
             })
             .collect();
+        let reactions: Vec<[f64; 2]> = reactions.into_iter().map(|r: [f64; 2]| [self.sys.sum(r[0]), self.sys.sum(r[1])]).collect();
+        if self.sys.part.is_some() {
+            // the walls' loads and the contacts of every process
+            let stats = &mut self.contact_stats;
+            self.sys.comm.sum_in_place(&mut stats.wall_force);
+            let mut load: Vec<f64> = stats.wall_load.iter().flatten().copied().collect();
+            self.sys.comm.sum_in_place(&mut load);
+            for (l, v) in stats.wall_load.iter_mut().zip(load.chunks_exact(2)) {
+                *l = [v[0], v[1]];
+            }
+            stats.active = self.sys.sum(stats.active as f64) as usize;
+        }
         // the boundary nodes of a contact problem (penalty-type or barrier)
         let boundary: Option<Vec<usize>> = match (&self.contact, &self.barrier) {
             (Some(c), _) => Some(c.boundary.slaves.iter().map(|&(n, _)| n).collect()),

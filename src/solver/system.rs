@@ -43,6 +43,28 @@ pub(super) struct TermMaps {
     pub pressure: BlockMap,
 }
 
+/// A process's part of a distributed model (the owned + ghost state,
+/// [`crate::parallel::part`]): its vectors hold its own dofs and equations first, then its
+/// ghosts'; every term is evaluated by one process (its elements, the barrier pairs whose first
+/// side it owns), the forces of the ghosts go to their owners (the reverse scatter) and come
+/// back summed (the forward scatter), and every norm, dot product and extremum is reduced over
+/// the processes.
+pub(super) struct PartSys {
+    /// The map of the part's nodes (2 dofs each).
+    pub nodes: crate::comm::IndexMap,
+    /// The map of its free equations.
+    pub eqs: Arc<crate::comm::IndexMap>,
+    /// Its own dofs and equations (the first of each).
+    pub own_dofs: usize,
+    pub own_eqs: usize,
+    /// The whole model's body of each of the part's bodies, and how many (the first) it owns.
+    pub bodies: Vec<usize>,
+    pub own_bodies: usize,
+    /// The whole model's equation of each of the part's equations (for what is defined on the
+    /// whole model's equations: the saddle's pseudo-random start).
+    pub eq_whole: Vec<usize>,
+}
+
 /// The global system (see the module docs).
 pub(super) struct System {
     pub assembler: Assembler,
@@ -74,9 +96,75 @@ pub(super) struct System {
     /// Whether every process takes part in the linear solves (the Schwarz PCG on several
     /// processes); otherwise rank 0 solves and broadcasts the update.
     pub distributed_solve: bool,
+    /// This process's part of a distributed model (None: the whole model is here).
+    pub part: Option<PartSys>,
 }
 
 impl System {
+    /// `x` summed over the processes of a part (itself otherwise).
+    pub fn sum(&self, x: f64) -> f64 {
+        if self.part.is_none() {
+            return x;
+        }
+        let mut v = [x];
+        self.comm.sum_in_place(&mut v);
+        v[0]
+    }
+
+    /// The largest `x` over the processes of a part (itself otherwise).
+    pub fn max(&self, x: f64) -> f64 {
+        if self.part.is_none() {
+            x
+        } else {
+            self.comm.max(x)
+        }
+    }
+
+    /// The smallest `x` over the processes of a part (itself otherwise).
+    pub fn min(&self, x: f64) -> f64 {
+        -self.max(-x)
+    }
+
+    /// Whether `flag` holds on any process of a part (itself otherwise).
+    pub fn any(&self, flag: bool) -> bool {
+        self.max(if flag { 1.0 } else { 0.0 }) > 0.0
+    }
+
+    /// The equations this process owns (all of them without a part).
+    pub fn own_eqs(&self) -> usize {
+        self.part.as_ref().map_or(self.r.len(), |p| p.own_eqs)
+    }
+
+    /// The dofs this process owns (all of them without a part).
+    pub fn own_dofs(&self) -> usize {
+        self.part.as_ref().map_or(self.f_int.len(), |p| p.own_dofs)
+    }
+
+    /// Σ a_q b_q over the free equations (of every process of a part).
+    pub fn dot(&self, a: &[f64], b: &[f64]) -> f64 {
+        let n = self.own_eqs();
+        self.sum(a[..n].iter().zip(&b[..n]).map(|(x, y)| x * y).sum::<f64>())
+    }
+
+    /// ‖v‖ over the dofs (a vector of every dof; of every process of a part).
+    pub fn norm_dofs(&self, v: &[f64]) -> f64 {
+        let n = self.own_dofs();
+        self.sum(v[..n].iter().map(|x| x * x).sum::<f64>()).sqrt()
+    }
+
+    /// A result of every process of a part, agreed: a failure on any fails all (the others
+    /// with `elsewhere`'s words); the result itself otherwise.
+    pub fn agree_part<T>(&self, r: Result<T, NewtonFailure>, elsewhere: &str) -> Result<T, NewtonFailure> {
+        if self.part.is_none() {
+            return r;
+        }
+        let failed = self.any(r.is_err());
+        match r {
+            Ok(_) if failed => Err(NewtonFailure::Contact(format!("{elsewhere} on another process"))),
+            r => r,
+        }
+    }
+
     /// Whether this process takes part in the linear solves (rank 0, or every process with
     /// the distributed Schwarz PCG).
     pub fn solves_here(&self) -> bool {
@@ -85,6 +173,9 @@ impl System {
 
     /// A linear-algebra result of the solving process, known to every process.
     pub fn agree(&self, r: Result<(), NewtonFailure>, what: &str) -> Result<(), NewtonFailure> {
+        if self.part.is_some() {
+            return self.agree_part(r, &format!("{what} failed"));
+        }
         agree_linear(self.par.as_ref(), r, what)
     }
 
@@ -170,10 +261,12 @@ impl Simulation {
         let x = self.coords(u);
         // on several processes the element tangent is summed onto rank 0 right after the
         // element assembly; the rest (loads, contact, springs, inertia) rank 0 alone adds
-        let root_tangent = tangent && self.sys.comm.is_root();
+        // (a part's every process adds its own terms to its rows)
+        let root_tangent = tangent && (self.sys.comm.is_root() || self.sys.part.is_some());
         // the barrier first: an iterate it cannot take fails before any work, and a pair
         // without a block grows the pattern before the elements fill it
-        self.evaluate_barrier(&x, tangent)?;
+        let barrier = self.evaluate_barrier(&x, tangent);
+        self.sys.agree_part(barrier, "the barrier met a contact")?;
         {
             let _t = self.clock.scope(Phase::ElementAssembly);
             let sys = &mut self.sys;
@@ -190,13 +283,21 @@ impl Simulation {
                         p.comm.sum_to_root(&mut sys.kk.values);
                     }
                 }
+                None if sys.part.is_some() => {
+                    let failed = sys.any(assembled.is_err());
+                    match assembled {
+                        Err(e) => return Err(e.into()),
+                        Ok(()) if failed => return Err(NewtonFailure::Contact("an element failed on another process".into())),
+                        Ok(()) => {}
+                    }
+                }
                 None => assembled?,
             }
         }
         self.external_forces(inc.time, &x, root_tangent);
         // element forces alone: with contact they balance the contact forces, which makes them
         // the force scale of a problem driven by walls (no external force, no reaction)
-        self.sys.f_elem_norm = self.sys.f_int.iter().map(|v| v * v).sum::<f64>().sqrt();
+        self.sys.f_elem_norm = if self.sys.part.is_some() { self.sys.norm_dofs(&self.sys.f_int) } else { self.sys.f_int.iter().map(|v| v * v).sum::<f64>().sqrt() };
         if let Some(c) = self.contact.as_mut() {
             let _t = self.clock.scope(Phase::ContactAssembly);
             let sys = &mut self.sys;
@@ -228,19 +329,29 @@ impl Simulation {
             dy.add_inertia(u, inc.dt, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
         }
         let sys = &mut self.sys;
+        if let Some(p) = &sys.part {
+            // the ghosts' forces to their owners, and the sums back to every copy
+            p.nodes.reverse_add(&mut sys.f_int, 2);
+            p.nodes.forward(&mut sys.f_int, 2);
+            p.nodes.forward(&mut sys.f_ext, 2);
+        }
         if !sys.eq_offset.is_empty() {
             for (f, o) in sys.f_int.iter_mut().zip(&sys.eq_offset) {
                 *f += o;
             }
         }
         let mut norm2 = 0.0;
+        let own = sys.own_eqs();
         for (d, &q) in sys.assembler.eq.iter().enumerate() {
             if q != FIXED {
                 let v = sys.f_ext[d] - sys.f_int[d];
                 sys.r[q] = v;
-                norm2 += v * v;
+                if q < own {
+                    norm2 += v * v;
+                }
             }
         }
+        let mut norm2 = sys.sum(norm2);
         // Lagrange-multiplier rows (scaled to forces, see `Multipliers::rows`)
         if let Some(c) = self.contact.as_ref() {
             let n_free = sys.assembler.n_free;
@@ -256,7 +367,7 @@ impl Simulation {
     pub(super) fn factor(&mut self) -> Result<(), NewtonFailure> {
         let _t = self.clock.scope(Phase::LinearSolve);
         let sys = &mut self.sys;
-        if sys.distributed_solve {
+        if sys.distributed_solve && sys.part.is_none() {
             // rank 0 holds the whole tangent (elements summed, contact added): every process
             // needs the rows of its particles
             sys.comm.broadcast(&mut sys.kk.values);
@@ -274,7 +385,7 @@ impl Simulation {
     pub(super) fn factor_definite(&mut self) -> bool {
         let _t = self.clock.scope(Phase::LinearSolve);
         let sys = &mut self.sys;
-        if sys.distributed_solve {
+        if sys.distributed_solve && sys.part.is_none() {
             sys.comm.broadcast(&mut sys.kk.values);
         }
         self.clock.count_factorisation();
@@ -287,7 +398,8 @@ impl Simulation {
         if sys.par.is_some() {
             sys.comm.broadcast(&mut flag);
         }
-        flag[0] > 0.5
+        // (a part: definite when so on every process)
+        sys.min(flag[0]) > 0.5
     }
 
     /// Solve `kk du = r` (rank 0 solves, the others receive `du`).
