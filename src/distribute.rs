@@ -17,11 +17,16 @@ pub const PROXIMITY_GAP_FRACTION: f64 = 0.1;
 /// nodes in the reference configuration (`model.x0`). A body without nodes gets an empty box at
 /// the origin.
 pub fn particles(model: &Model) -> Vec<Particle> {
+    particles_at(model, &model.x0)
+}
+
+/// [`particles`] with the boxes of the nodes at coordinates `x` (every node of `model`).
+pub fn particles_at(model: &Model, x: &[[f64; 2]]) -> Vec<Particle> {
     model
         .bodies
         .iter()
         .map(|b| {
-            let nodes = &model.x0[b.node_offset..b.node_offset + b.mesh.nodes.len()];
+            let nodes = &x[b.node_offset..b.node_offset + b.mesh.nodes.len()];
             let mut min = [f64::INFINITY; 2];
             let mut max = [f64::NEG_INFINITY; 2];
             for p in nodes {

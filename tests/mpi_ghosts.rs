@@ -137,8 +137,16 @@ fn pressed_grid() -> (Model, Vec<f64>, Vec<Wall>) {
 
 /// Internal force of the elements `keep` (all when empty) at `u` from the reference state.
 fn element_forces(model: &Model, u: &[f64], keep: &[bool]) -> Vec<f64> {
+    assemble(model, u, keep, &[], false).3
+}
+
+/// The elements `keep` (all when empty) at `u` from the reference state: the assembler, its
+/// pattern with the extra `blocks` (and with `tangent`, the element tangent in it), the
+/// equation numbers and the internal force.
+fn assemble(model: &Model, u: &[f64], keep: &[bool], blocks: &[Vec<usize>], tangent: bool) -> (Assembler, mpfem::linalg::CsrMatrix, Vec<usize>, Vec<f64>) {
     let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
-    let (mut assembler, _kk) = Assembler::new(model, eq, n_free);
+    let (mut assembler, mut kk) = Assembler::new(model, eq.clone(), n_free);
+    assembler.set_terms(&mut kk, blocks, &[]);
     if !keep.is_empty() {
         assembler.retain_elements(keep);
     }
@@ -147,9 +155,9 @@ fn element_forces(model: &Model, u: &[f64], keep: &[bool]) -> Vec<f64> {
     let mut f = vec![0.0; model.n_dofs()];
     let mut fields = ElementFields::new(ne);
     assembler
-        .assemble(model, u, &vec![[MatState::default(); 4]; ne], &vec![[0.0; N_ENH]; ne], &vol, None, TimeIncrement { time: 0.0, dt: 1.0 }, None, &mut f, &mut fields, None)
+        .assemble(model, u, &vec![[MatState::default(); 4]; ne], &vec![[0.0; N_ENH]; ne], &vol, None, TimeIncrement { time: 0.0, dt: 1.0 }, tangent.then_some(&mut kk), &mut f, &mut fields, None)
         .expect("assembly");
-    f
+    (assembler, kk, eq, f)
 }
 
 fn coords(model: &Model, u: &[f64]) -> Vec<[f64; 2]> {
@@ -258,20 +266,8 @@ const SHIFT: f64 = 1e3;
 /// `own` dofs); with the equation numbers of the dofs and −f on the free equations.
 #[cfg(feature = "petsc")]
 fn tangent(model: &Model, u: &[f64], eval: &BarrierEval, keep: &[bool], own: usize) -> (mpfem::linalg::CsrMatrix, Vec<usize>, Vec<f64>) {
-    let (eq, n_free) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
-    let (mut assembler, mut kk) = Assembler::new(model, eq.clone(), n_free);
     let blocks: Vec<Vec<usize>> = eval.edges.iter().map(|e| e.dofs.to_vec()).chain(eval.quads.iter().map(|q| q.dofs.to_vec())).chain(eval.walls.iter().map(|w| vec![2 * w.node, 2 * w.node + 1])).collect();
-    assembler.set_terms(&mut kk, &blocks, &[]);
-    if !keep.is_empty() {
-        assembler.retain_elements(keep);
-    }
-    let ne = model.elements.len();
-    let vol: Vec<Volumetric> = model.elem_material.iter().map(|&m| Volumetric { kappa: model.materials[m].bulk_modulus().expect("compressible"), lambda: 0.0 }).collect();
-    let mut f = vec![0.0; model.n_dofs()];
-    let mut fields = ElementFields::new(ne);
-    assembler
-        .assemble(model, u, &vec![[MatState::default(); 4]; ne], &vec![[0.0; N_ENH]; ne], &vol, None, TimeIncrement { time: 0.0, dt: 1.0 }, Some(&mut kk), &mut f, &mut fields, None)
-        .expect("assembly");
+    let (assembler, mut kk, eq, mut f) = assemble(model, u, keep, &blocks, true);
     let map = assembler.block_map(&kk, &blocks);
     let hessians = eval.edges.iter().map(|e| e.term.hess.iter().flatten().copied().collect::<Vec<f64>>()).chain(eval.quads.iter().map(|q| q.term.hess.iter().flatten().copied().collect())).chain(eval.walls.iter().map(|w| w.term.hess.iter().flatten().copied().collect()));
     for (i, h) in hessians.enumerate() {
@@ -282,7 +278,7 @@ fn tangent(model: &Model, u: &[f64], eval: &BarrierEval, keep: &[bool], own: usi
         diagonal.add_entry(&mut kk.values, d, 0, 0, SHIFT);
     }
     eval.add_gradient(&mut f);
-    let mut b = vec![0.0; n_free];
+    let mut b = vec![0.0; assembler.n_free];
     for (d, &q) in eq.iter().enumerate() {
         if q != mpfem::assembly::FIXED {
             b[q] = -f[d];

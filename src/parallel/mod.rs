@@ -220,21 +220,11 @@ impl Distribution {
         let mut code = [0.0; 4];
         if mine == first {
             if let Err(e) = &local {
-                let [kind, a, b] = match e.source {
-                    MaterialError::InvertedElement(j) => [1.0, j, 0.0],
-                    MaterialError::ReturnMapFailed { iterations, residual } => [2.0, iterations as f64, residual],
-                    MaterialError::InvalidVolumeRatio(j) => [3.0, j, 0.0],
-                };
-                code = [e.element as f64, kind, a, b];
+                code = encode_failure(e);
             }
         }
         self.comm.sum_in_place(&mut code);
-        let source = match code[1] as i64 {
-            2 => MaterialError::ReturnMapFailed { iterations: code[2] as usize, residual: code[3] },
-            3 => MaterialError::InvalidVolumeRatio(code[2]),
-            _ => MaterialError::InvertedElement(code[2]),
-        };
-        Err(AssemblyError { element: code[0] as usize, source })
+        Err(decode_failure(&code))
     }
 
     /// Make the element fields of every element the owner's, on every process: each process
@@ -309,6 +299,26 @@ impl Distribution {
         }
         out
     }
+}
+
+/// An element failure as four numbers (element, kind, two values), for an exchange.
+pub fn encode_failure(e: &AssemblyError) -> [f64; 4] {
+    let [kind, a, b] = match e.source {
+        MaterialError::InvertedElement(j) => [1.0, j, 0.0],
+        MaterialError::ReturnMapFailed { iterations, residual } => [2.0, iterations as f64, residual],
+        MaterialError::InvalidVolumeRatio(j) => [3.0, j, 0.0],
+    };
+    [e.element as f64, kind, a, b]
+}
+
+/// The element failure of [`encode_failure`]'s numbers.
+pub fn decode_failure(code: &[f64; 4]) -> AssemblyError {
+    let source = match code[1] as i64 {
+        2 => MaterialError::ReturnMapFailed { iterations: code[2] as usize, residual: code[3] },
+        3 => MaterialError::InvalidVolumeRatio(code[2]),
+        _ => MaterialError::InvertedElement(code[2]),
+    };
+    AssemblyError { element: code[0] as usize, source }
 }
 
 fn put_history(v: &mut Vec<f64>, h: &PairHistory) {

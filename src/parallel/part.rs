@@ -16,29 +16,6 @@ use crate::comm::{Collective, IndexMap, IndexMapError};
 use crate::model::{Model, ModelError, PartMap};
 use std::sync::Arc;
 
-/// The axis-aligned bounding box of each body's nodes at coordinates `x` (every node of
-/// `model`), as the partitioner's particles (element count as weight).
-pub fn body_boxes(model: &Model, x: &[[f64; 2]]) -> Vec<partition::Particle> {
-    model
-        .bodies
-        .iter()
-        .map(|b| {
-            let nodes = &x[b.node_offset..b.node_offset + b.mesh.nodes.len()];
-            let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for p in nodes {
-                for k in 0..2 {
-                    min[k] = min[k].min(p[k]);
-                    max[k] = max[k].max(p[k]);
-                }
-            }
-            if nodes.is_empty() {
-                (min, max) = ([0.0; 2], [0.0; 2]);
-            }
-            partition::Particle { elements: b.mesh.elements.len() as u64, min, max }
-        })
-        .collect()
-}
-
 /// The ghosts of process `rank`: the bodies other processes own (`owner`) whose boxes come
 /// within `reach` of the box of a body it owns, ascending. (The relation is symmetric: when
 /// process p ghosts q's body B for its body A, q ghosts A for B.)
@@ -143,7 +120,7 @@ impl RankPart {
         if owner.len() != whole.bodies.len() || owner.iter().any(|&o| o >= size) {
             return Err(PartError::Owners(format!("{} owners for {} bodies on {size} processes (expected one process below {size} per body)", owner.len(), whole.bodies.len())));
         }
-        let ghosts = ghost_bodies(&body_boxes(whole, x), owner, rank, reach)?;
+        let ghosts = ghost_bodies(&crate::distribute::particles_at(whole, x), owner, rank, reach)?;
         let owned: Vec<usize> = (0..owner.len()).filter(|&b| owner[b] == rank).collect();
         let body_nodes: Vec<usize> = whole.bodies.iter().map(|b| b.mesh.n_nodes()).collect();
         let numbering = DistributedNumbering::new(owner, &body_nodes, size);

@@ -193,7 +193,7 @@ impl Simulation {
     /// # Errors
     /// What the part cannot take (above), or what [`Simulation::new`] refuses.
     pub fn new_part(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
-        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, .. } = part;
+        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole, .. } = part;
         let unsupported = if model.contact.method != crate::contact::ContactMethod::Barrier {
             Some("a contact method other than the barrier")
         } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
@@ -222,7 +222,7 @@ impl Simulation {
                 eq_whole[q] = whole_eq.get(d).copied().unwrap_or(FIXED);
             }
         }
-        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole };
+        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, elements: whole.element };
         Self::build_with(model, time, spec, comm, None, Some(sys))
     }
 

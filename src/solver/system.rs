@@ -63,6 +63,8 @@ pub(super) struct PartSys {
     /// The whole model's equation of each of the part's equations (for what is defined on the
     /// whole model's equations: the saddle's pseudo-random start).
     pub eq_whole: Vec<usize>,
+    /// The whole model's element of each of the part's elements (to name a failed one).
+    pub elements: Vec<usize>,
 }
 
 /// The global system (see the module docs).
@@ -163,6 +165,26 @@ impl System {
             Ok(_) if failed => Err(NewtonFailure::Contact(format!("{elsewhere} on another process"))),
             r => r,
         }
+    }
+
+    /// An element assembly of every process of a part, agreed: when elements failed, every
+    /// process fails with the failure of the lowest process that had one (its element named by
+    /// its number in the whole model), so that all take the same path after it (a failed
+    /// element restarts a prediction, and is no reason for the barrier's descent).
+    pub fn agree_elements(&self, local: Result<(), crate::assembly::AssemblyError>) -> Result<(), crate::assembly::AssemblyError> {
+        let Some(p) = &self.part else { return local };
+        let rank = self.comm.rank() as u64;
+        let first = self.comm.min_u64(if local.is_err() { rank } else { u64::MAX });
+        if first == u64::MAX {
+            return Ok(());
+        }
+        let mut code = [0.0; 4];
+        if let (true, Err(e)) = (first == rank, &local) {
+            let whole = crate::assembly::AssemblyError { element: p.elements.get(e.element).copied().unwrap_or(e.element), source: e.source.clone() };
+            code = crate::parallel::encode_failure(&whole);
+        }
+        self.comm.sum_in_place(&mut code);
+        Err(crate::parallel::decode_failure(&code))
     }
 
     /// Whether this process takes part in the linear solves (rank 0, or every process with
@@ -283,14 +305,7 @@ impl Simulation {
                         p.comm.sum_to_root(&mut sys.kk.values);
                     }
                 }
-                None if sys.part.is_some() => {
-                    let failed = sys.any(assembled.is_err());
-                    match assembled {
-                        Err(e) => return Err(e.into()),
-                        Ok(()) if failed => return Err(NewtonFailure::Contact("an element failed on another process".into())),
-                        Ok(()) => {}
-                    }
-                }
+                None if sys.part.is_some() => sys.agree_elements(assembled)?,
                 None => assembled?,
             }
         }
