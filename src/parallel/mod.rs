@@ -359,3 +359,18 @@ fn all_gather_evals<const N: usize>(comm: &dyn Collective, local: &[Eval<N>]) ->
     }
     comm.all_gather_varcount(&buf).chunks_exact(eval_width(N)).map(read_eval).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every kind of element failure crosses an exchange unchanged (the numbers are exact in
+    /// f64), so every process reports and acts on the same failure.
+    #[test]
+    fn element_failures_survive_the_exchange() {
+        for source in [MaterialError::InvertedElement(-0.25), MaterialError::ReturnMapFailed { iterations: 50, residual: 3.5e-7 }, MaterialError::InvalidVolumeRatio(0.0)] {
+            let e = AssemblyError { element: 123_456, source };
+            assert_eq!(decode_failure(&encode_failure(&e)), e);
+        }
+    }
+}
