@@ -13,7 +13,9 @@
 //!   barrier energies and wall forces summed over the processes equal the whole model's
 //!   (1e-12 relative), and so does the smallest collision-free step fraction of a motion that
 //!   closes the gaps (exactly: the same pairs' times of impact);
-//! - the forward scatter gives every ghost node its owner's values exactly;
+//! - the forward scatter gives every ghost node its owner's values exactly, and rank 0 gathers
+//!   the whole model's node and element vectors from the owners exactly (for the output) and
+//!   sends each process its part of a whole-model vector exactly (for a restart);
 //! - (feature `petsc`) the distributed tangent: each process assembles its owned elements'
 //!   and its pairs' terms (plus a diagonal shift on its own dofs) into the rows of its own and
 //!   its ghost equations, PETSc (MUMPS LDLᵀ) gets the ghost rows through their owners, and the
@@ -240,6 +242,20 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
     }
     part.nodes.forward(&mut v, 2);
     assert_eq!(v, u_part, "forward scatter gives every ghost its owner's value");
+    // rank 0 gathers the whole model's node and element vectors from the owners
+    let gathered = part.gather_nodes(&u_part, 2);
+    let areas: Vec<f64> = m.elements.iter().map(|el| mpfem::mesh::polygon_area(el.iter().map(|&n| xp[n]))).collect();
+    let gathered_areas = part.gather_elements(&areas, 1);
+    if rank == 0 {
+        assert_eq!(gathered.as_deref(), Some(&u[..]), "rank 0 gathers the whole displacement");
+        let whole_areas: Vec<f64> = whole.elements.iter().map(|el| mpfem::mesh::polygon_area(el.iter().map(|&n| x[n]))).collect();
+        assert_eq!(gathered_areas, Some(whole_areas), "rank 0 gathers every element's value");
+    } else {
+        assert!(gathered.is_none() && gathered_areas.is_none());
+    }
+    // and sends each process its part of a whole-model vector (a restart)
+    let scattered = part.scatter_nodes((rank == 0).then_some(&u[..]), 2);
+    assert_eq!(scattered, u_part, "every process receives its nodes' values, its ghosts' included");
     #[cfg(feature = "petsc")]
     let solve = distributed_solve(&whole, &u, &eval, &part, &u_part, &ep);
     #[cfg(not(feature = "petsc"))]

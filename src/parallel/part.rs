@@ -178,6 +178,46 @@ impl RankPart {
         }
     }
 
+    /// Rank 0's whole-model vector of `bs` values per node, gathered from every process's own
+    /// nodes (`local`: `bs` values per node of the part; its ghosts' are not read): for the
+    /// results and checkpoints, which rank 0 writes in the whole model's numbering. None on the
+    /// other processes. Collective.
+    pub fn gather_nodes(&self, local: &[f64], bs: usize) -> Option<Vec<f64>> {
+        let own = self.nodes.n_owned();
+        gather_records(self.nodes.comm(), (0..own).map(|i| (self.whole.node[i], &local[i * bs..(i + 1) * bs])), bs, self.nodes.n_global())
+    }
+
+    /// [`RankPart::gather_nodes`] for element values (`bs` per element of the part; its own
+    /// bodies' elements are read).
+    pub fn gather_elements(&self, local: &[f64], bs: usize) -> Option<Vec<f64>> {
+        let own: Vec<usize> = (0..self.model.elements.len()).filter(|&e| self.model.elem_body[e] < self.n_owned_bodies).collect();
+        let total = self.nodes.comm().all_gather_varcount(&[own.len() as f64]).iter().sum::<f64>() as usize;
+        gather_records(self.nodes.comm(), own.iter().map(|&e| (self.whole.element[e], &local[e * bs..(e + 1) * bs])), bs, total)
+    }
+
+    /// The part's vector (`bs` values per node, its ghosts' included) of rank 0's whole-model
+    /// vector `whole` (given on rank 0; the others pass None): what a restart reads from a
+    /// checkpoint written in the whole model's numbering. Collective.
+    pub fn scatter_nodes(&self, whole: Option<&[f64]>, bs: usize) -> Vec<f64> {
+        let comm = self.nodes.comm();
+        // every process's nodes to rank 0, which sends each its values
+        let wanted: Vec<f64> = self.whole.node.iter().map(|&n| n as f64).collect();
+        let size = comm.size();
+        let mut out = vec![Vec::new(); size];
+        let lists = comm.gather_varcount_to_root(&[wanted.len() as f64]);
+        let nodes = comm.gather_varcount_to_root(&wanted);
+        if let (true, Some(w)) = (comm.is_root(), whole) {
+            let mut at = 0;
+            for (r, &count) in lists.iter().enumerate() {
+                let count = count as usize;
+                out[r] = nodes[at..at + count].iter().flat_map(|&n| w[n as usize * bs..(n as usize + 1) * bs].iter().copied()).collect();
+                at += count;
+            }
+        }
+        let got = comm.exchange(&out);
+        got.into_iter().next().unwrap_or_default()
+    }
+
     /// Whether each of the part's bodies is owned here (the owned ones come first).
     pub fn owned_bodies(&self) -> Vec<bool> {
         (0..self.bodies.len()).map(|k| k < self.n_owned_bodies).collect()
@@ -187,6 +227,28 @@ impl RankPart {
     pub fn owned_elements(&self) -> Vec<bool> {
         self.model.elem_body.iter().map(|&b| b < self.n_owned_bodies).collect()
     }
+}
+
+/// Rank 0's vector of `n` records of `bs` values, each process sending `(index, values)`
+/// records (every index once over the processes); None on the others.
+fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize) -> Option<Vec<f64>> {
+    let mut buf = Vec::new();
+    for (i, v) in records {
+        buf.push(i as f64);
+        buf.extend_from_slice(v);
+    }
+    let all = comm.gather_varcount_to_root(&buf);
+    if !comm.is_root() {
+        return None;
+    }
+    let mut out = vec![f64::NAN; n * bs];
+    for r in all.chunks_exact(bs + 1) {
+        let i = r[0] as usize;
+        if i < n {
+            out[i * bs..(i + 1) * bs].copy_from_slice(&r[1..]);
+        }
+    }
+    Some(out)
 }
 
 #[cfg(test)]
