@@ -7,6 +7,8 @@
 //! assembles their elements and its pairs into its rows, PETSc (MUMPS) solves over the
 //! processes, and every norm, dot product and wall force is reduced.
 //!
+//! The same with Coulomb friction 0.2 between the discs, to 1e-7 (see [`FRICTION_TOL`]).
+//!
 //! Reference: the same case run whole and serially (faer) on every process. Checked at every
 //! step: the same step sizes, and the wall forces, pressures and the solid ratio equal to
 //! 1e-8 relative of the largest value of their column (the tolerance for the
@@ -86,10 +88,29 @@ fn run(sim: &mut Simulation) -> Vec<Vec<f64>> {
 
 fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(CASE, std::path::Path::new(".")).expect("case");
+    let _petsc = mpfem::linalg::petsc::start("").expect("PETSc");
+    let friction = CASE.replace("[contact]\ncontact = \"sliding\"\n", "[contact]\ncontact = \"rubbing\"\nfriction = 0.2\n");
+    assert_ne!(friction, CASE);
+    let frictionless = compare(comm.clone(), CASE, FRICTIONLESS_TOL, true);
+    let rubbing = compare(comm, &friction, FRICTION_TOL, false);
+    format!("{frictionless}; with friction 0.2: {rubbing}")
+}
+
+/// The tolerance of the frictionless case: the for the distributed direct solver.
+const FRICTIONLESS_TOL: f64 = 1e-8;
+/// The tolerance of the case with friction 0.2: its lagged friction amplifies the round-off of
+/// the linear solves, so that faer's and MUMPS's factorisations of the *whole* model already
+/// end 1.87e-8 apart (relative, `mpfem run` with and without `linear = "petsc"`, measured);
+/// the parts on one process end 1.87e-8 from faer as well.
+const FRICTION_TOL: f64 = 1e-7;
+
+/// The run of `case` on the parts against the whole serial run, to `tol` relative; with
+/// `blind` also a part without ghosts, which must stop. The report's words.
+fn compare(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str, tol: f64, blind: bool) -> String {
+    let (rank, size) = (comm.rank(), comm.size());
+    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
     let whole = Model::from_case(&case).expect("model");
     let serial = run(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
-    let _petsc = mpfem::linalg::petsc::start("").expect("PETSc");
     let mut owner: Vec<f64> = mpfem::distribute::partition_particles(&whole, size).iter().map(|&o| o as f64).collect();
     comm.broadcast(&mut owner);
     let owner: Vec<usize> = owner.iter().map(|&o| o as usize).collect();
@@ -113,10 +134,10 @@ fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
             worst = worst.max((a[c] - b[c]).abs() / scale);
         }
     }
-    assert!(worst <= 1e-8, "rank {rank} of {size}: the parts' history differs from the whole run's by {worst:e} (relative)");
+    assert!(worst <= tol, "rank {rank} of {size}: the parts' history differs from the whole run's by {worst:e} (relative; tolerance {tol:e})");
     // ghosts chosen too close (boxes that overlap only: none here) miss the pairs across the
     // processes: the run stops, naming a body that came within reach and is not a ghost
-    if size > 1 {
+    if blind && size > 1 {
         let blind = RankPart::new(&whole, &whole.x0, &owner, 0.0, comm.clone()).expect("part");
         let mut sim = Simulation::new_part(blind, case.time.clone(), case.solver.clone()).expect("part simulation");
         let err = sim.run(&mut |_, _| {}).expect_err("a part without its ghosts fails");
