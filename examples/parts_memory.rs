@@ -8,8 +8,10 @@
 //!     mpirun -n 2 target/release/examples/parts_memory 32 3        # parts on 2 processes
 //!     target/release/examples/parts_memory 32 3 whole              # the whole model, faer
 //!
-//! Arguments: the grid's side n (default 32: 1,024 discs), the steps (default 3), and `whole`
-//! to run the whole model serially instead of a part.
+//! Arguments: the grid's side n (default 32: 1,024 discs) or a case file (`.toml`), the steps
+//! (default 3; 0: to the case's end), and `whole` to run the whole model serially instead of a
+//! part. Each process prints the last step's time, solid ratio and wall pressures too, so that
+//! a part's run can be held against the whole one's.
 
 use mpfem::model::Model;
 use mpfem::parallel::part::RankPart;
@@ -27,13 +29,17 @@ fn status_mb(field: &str) -> f64 {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).and_then(|v| v.parse().ok()).unwrap_or(32);
+    let file = args.get(1).filter(|v| v.ends_with(".toml")).cloned();
     let steps: usize = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(3);
     let whole_run = args.get(3).is_some_and(|v| v == "whole");
     let comm = mpfem::parallel::launch();
     let (rank, size) = (comm.rank(), comm.size());
     let side = 10.0 * n as f64;
-    let text = mpfem::bench_support::disc_grid_case(n, side, 0.75, 2.0, "");
-    let case = mpfem::case::parse(&text, std::path::Path::new(".")).expect("case");
+    let (text, dir) = match &file {
+        Some(f) => (std::fs::read_to_string(f).expect("the case file"), std::path::Path::new(f).parent().map(|p| p.to_path_buf()).unwrap_or_default()),
+        None => (mpfem::bench_support::disc_grid_case(n, side, 0.75, 2.0, ""), std::path::PathBuf::from(".")),
+    };
+    let case = mpfem::case::parse(&text, &dir).expect("case");
     let whole = Model::from_case(&case).expect("model");
     let (n_nodes, n_elements) = (whole.n_nodes(), whole.elements.len());
     let rss_whole = status_mb("VmRSS:");
@@ -45,17 +51,25 @@ fn main() {
         let mut owner: Vec<f64> = mpfem::distribute::partition_particles(&whole, size).iter().map(|&o| o as f64).collect();
         comm.broadcast(&mut owner);
         let owner: Vec<usize> = owner.iter().map(|&o| o as usize).collect();
-        let part = RankPart::new(&whole, &whole.x0, &owner, 0.25 * side / n as f64, comm.clone()).expect("part");
+        // ghosts within a quarter of the median particle's size
+        let mut sizes: Vec<f64> = mpfem::distribute::particles(&whole).iter().map(|p| (p.max[0] - p.min[0]).max(p.max[1] - p.min[1])).collect();
+        sizes.sort_by(f64::total_cmp);
+        let reach = 0.25 * sizes[sizes.len() / 2];
+        let part = RankPart::new(&whole, &whole.x0, &owner, reach, comm.clone()).expect("part");
         drop(whole);
         let local = (part.model.n_nodes(), part.model.elements.len());
         (Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation"), local)
     };
     let rss_part = status_mb("VmRSS:");
     let mut done = 0;
+    let mut last = String::new();
     let t0 = std::time::Instant::now();
-    let summary = sim.run_controlled(&mut |_, _| {
+    let summary = sim.run_controlled(&mut |_, r| {
         done += 1;
-        if done >= steps {
+        if let Some(c) = &r.compaction {
+            last = format!("t = {:.9e} s, solid ratio {:.9e}, pressures {:?}", r.time, c.solid_ratio, c.pressure);
+        }
+        if steps > 0 && done >= steps {
             ControlFlow::Break("steps done".into())
         } else {
             ControlFlow::Continue(())
@@ -63,7 +77,7 @@ fn main() {
     });
     let seconds = t0.elapsed().as_secs_f64();
     println!(
-        "rank {rank} of {size} ({}): {} of {n_nodes} nodes, {} of {n_elements} elements; VmRSS {rss_whole:.0} MB with the whole model, {rss_part:.0} MB with the simulation built; peak {:.0} MB; {done} steps in {seconds:.1} s ({})",
+        "rank {rank} of {size} ({}): {} of {n_nodes} nodes, {} of {n_elements} elements; VmRSS {rss_whole:.0} MB with the whole model, {rss_part:.0} MB with the simulation built; peak {:.0} MB; {done} steps in {seconds:.1} s ({}); last step: {last}",
         if whole_run { "whole" } else { "part" },
         local.0,
         local.1,
