@@ -1,6 +1,6 @@
 //! The owned + ghost state of a distributed run (`mpfem::parallel::part`,
-//! `mpfem::parallel::index_map`), on 4 real MPI processes: this test starts `mpirun -n 4` on its
-//! own test binary, whose processes (marked by `MPFEM_GHOST_CHILD`) each build their part of a
+//! `mpfem::comm::IndexMap`), on 4 real MPI processes: this test starts `mpirun -n 4` on its
+//! own test binary, whose processes (`tests/common::on_ranks`) each build their part of a
 //! 4 × 4 grid of elastic discs pressed together (every neighbour pair and every outer disc's
 //! wall within the barrier's d̂) and check:
 //!
@@ -25,6 +25,8 @@
 //! The reference is the serial evaluation of the whole model on each process (it is small).
 #![cfg(feature = "mpi")]
 
+mod common;
+
 use mpfem::assembly::{number_equations, Assembler, ElementFields};
 use mpfem::contact::barrier_problem::BarrierEval;
 use mpfem::contact::geometry::Wall;
@@ -36,7 +38,6 @@ use mpfem::parallel::Collective;
 use std::sync::Arc;
 
 
-const CHILD: &str = "MPFEM_GHOST_CHILD";
 const RANKS: usize = 4;
 
 /// A deterministic pseudo-random number in [−1, 1) of `k` (a hash of it).
@@ -355,35 +356,7 @@ fn distributed_solve(whole: &Model, u: &[f64], eval: &BarrierEval, part: &RankPa
 
 #[test]
 fn owned_and_ghost_parts_on_four_processes() {
-    if std::env::var_os(CHILD).is_some() {
-        let comm = mpfem::parallel::launch();
-        // (a process that fails ends them all: the others would wait for it)
-        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| rank_work(comm.clone()))) {
-            Ok(line) => println!("GHOSTS {line}"),
-            Err(_) => {
-                comm.abort_all(101);
-                std::process::exit(101);
-            }
-        }
-        return;
+    for line in common::on_ranks(RANKS, "owned_and_ghost_parts_on_four_processes", rank_work) {
+        eprintln!("GHOSTS {line}");
     }
-    let exe = std::env::current_exe().expect("test binary");
-    let out = std::process::Command::new("timeout")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_plm", "isolated")
-        .env(CHILD, "1")
-        .args(["300", "mpirun", "--oversubscribe", "--bind-to", "none", "-n", &RANKS.to_string()])
-        .arg(exe)
-        .args(["--exact", "owned_and_ghost_parts_on_four_processes", "--nocapture", "--test-threads", "1"])
-        .output()
-        .expect("mpirun (scripts/setup.sh installs Open MPI)");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    // (libtest's own "test … " may precede a report on its line)
-    let lines: Vec<&str> = stdout.lines().filter_map(|l| l.find("GHOSTS rank").map(|i| &l[i..])).collect();
-    for l in &lines {
-        eprintln!("{l}");
-    }
-    assert!(out.status.success(), "mpirun -n {RANKS}: {}\n{stdout}\n{}", out.status, String::from_utf8_lossy(&out.stderr));
-    assert_eq!(lines.len(), RANKS, "a report from every process:\n{stdout}");
 }

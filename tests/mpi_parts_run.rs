@@ -1,6 +1,6 @@
 //! A simulation on the owned + ghost parts of a distributed model (`Simulation::new_part`), on
-//! 1, 2, 3 and 4 real MPI processes (this test starts `mpirun` on its own test binary, whose
-//! processes are marked by `MPFEM_PARTS_CHILD`): a 3 × 3 grid of elastic aluminium discs with the
+//! 1, 2, 3 and 4 real MPI processes (`mpirun` on its own test binary, `tests/common::on_ranks`):
+//! a 3 × 3 grid of elastic aluminium discs with the
 //! frictionless barrier contact (the default; the grid leaves saddles of its symmetric path,
 //! which the parts take alike), compacted from solid ratio
 //! 0.76 to 0.80 between two moving walls. Each process holds its own discs and its ghosts only,
@@ -24,11 +24,12 @@
 //! 3 × 3 grid as sensitive. The parts follow MUMPS's whole-model path there to the last digit.
 #![cfg(feature = "petsc")]
 
+mod common;
+
 use mpfem::model::Model;
 use mpfem::parallel::part::RankPart;
 use mpfem::solver::{Simulation, StepReport};
 
-const CHILD: &str = "MPFEM_PARTS_CHILD";
 const CASE: &str = r#"title = "3 x 3 discs, barrier, parts"
 [[materials]]
 name = "alu"
@@ -87,7 +88,6 @@ fn run(sim: &mut Simulation) -> Vec<Vec<f64>> {
 }
 
 fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
-    let (rank, size) = (comm.rank(), comm.size());
     let _petsc = mpfem::linalg::petsc::start("").expect("PETSc");
     let friction = CASE.replace("[contact]\ncontact = \"sliding\"\n", "[contact]\ncontact = \"rubbing\"\nfriction = 0.2\n");
     assert_ne!(friction, CASE);
@@ -148,36 +148,9 @@ fn compare(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str, to
 
 #[test]
 fn a_run_on_owned_and_ghost_parts_equals_the_whole_run() {
-    if std::env::var_os(CHILD).is_some() {
-        let comm = mpfem::parallel::launch();
-        // (a process that fails ends them all: the others would wait for it)
-        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| rank_work(comm.clone()))) {
-            Ok(line) => println!("PARTS {line}"),
-            Err(_) => {
-                comm.abort_all(101);
-                std::process::exit(101);
-            }
-        }
-        return;
-    }
-    let exe = std::env::current_exe().expect("test binary");
     for ranks in [1, 2, 3, 4] {
-        let out = std::process::Command::new("timeout")
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("OMPI_MCA_plm", "isolated")
-            .env(CHILD, "1")
-            .args(["300", "mpirun", "--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string()])
-            .arg(&exe)
-            .args(["--exact", "a_run_on_owned_and_ghost_parts_equals_the_whole_run", "--nocapture", "--test-threads", "1"])
-            .output()
-            .expect("mpirun (scripts/setup.sh installs Open MPI)");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        let lines: Vec<&str> = stdout.lines().filter_map(|l| l.find("PARTS ").map(|i| &l[i..])).collect();
-        for l in &lines {
-            eprintln!("{l}");
+        for line in common::on_ranks(ranks, "a_run_on_owned_and_ghost_parts_equals_the_whole_run", rank_work) {
+            eprintln!("PARTS {line}");
         }
-        assert!(out.status.success(), "mpirun -n {ranks}: {}\n{stdout}\n{}", out.status, String::from_utf8_lossy(&out.stderr));
-        assert_eq!(lines.len(), ranks, "a report from every process:\n{stdout}");
     }
 }

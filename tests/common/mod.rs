@@ -61,3 +61,45 @@ pub fn run_quiet(dir: &Path, case: &str) -> PathBuf {
     assert!(st.success(), "mpfem run {} failed", path.display());
     out
 }
+
+/// Marks the processes [`on_ranks`] starts.
+pub const RANK_CHILD: &str = "MPFEM_TEST_RANK_CHILD";
+
+/// Run `work` on `ranks` real MPI processes of this test binary and return each process's
+/// report (its line), in no particular order. The processes run the test `test` again (its
+/// name, which must be unique in the binary); there this call runs `work` with MPI's world and
+/// ends the process (a process whose `work` panics aborts them all, so that none waits for it).
+/// `mpirun` is stopped after 300 s. Panics, with the processes' output, when `mpirun` fails or
+/// a process gave no report.
+pub fn on_ranks(ranks: usize, test: &str, work: fn(std::sync::Arc<dyn mpfem::parallel::Collective>) -> String) -> Vec<String> {
+    if std::env::var_os(RANK_CHILD).is_some() {
+        let comm = mpfem::parallel::launch();
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(comm.clone()))) {
+            Ok(line) => println!("RANK REPORT {line}"),
+            Err(_) => {
+                comm.abort_all(101);
+                std::process::exit(101);
+            }
+        }
+        // (MPI finalises here)
+        drop(comm);
+        std::process::exit(0);
+    }
+    let exe = std::env::current_exe().expect("test binary");
+    let out = Command::new("timeout")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_plm", "isolated")
+        .env(RANK_CHILD, "1")
+        .args(["300", "mpirun", "--oversubscribe", "--bind-to", "none", "-n", &ranks.to_string()])
+        .arg(exe)
+        .args(["--exact", test, "--nocapture", "--test-threads", "1"])
+        .output()
+        .expect("mpirun (scripts/setup.sh installs Open MPI)");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // (libtest's own "test … " may precede a report on its line)
+    let lines: Vec<String> = stdout.lines().filter_map(|l| l.find("RANK REPORT ").map(|i| l[i + 12..].to_string())).collect();
+    assert!(out.status.success(), "mpirun -n {ranks}: {}\n{stdout}\n{}", out.status, String::from_utf8_lossy(&out.stderr));
+    assert_eq!(lines.len(), ranks, "a report from every process:\n{stdout}");
+    lines
+}
