@@ -14,7 +14,8 @@
 //! 1e-8 relative of the largest value of their column (the tolerance for the
 //! distributed direct solver; the Newton residual tolerance of 1e-11 keeps the iterates'
 //! differences far below it). A part made without its ghosts (boxes that must overlap) stops
-//! its run, naming a body that came within the contact reach and is not a ghost. (That no process holds the whole mesh is `tests/mpi_ghosts.rs`'s
+//! its run at its first step, without cut-backs, naming a body that came within the contact
+//! reach and is not a ghost. (That no process holds the whole mesh is `tests/mpi_ghosts.rs`'s
 //! check, on a 4 × 4 grid: in this 3 × 3 one every disc is near the middle one.)
 //!
 //! Why this case: it is one whose path round-off does not change. A 4 × 4 grid of the same discs
@@ -142,6 +143,8 @@ fn compare(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str, to
         let mut sim = Simulation::new_part(blind, case.time.clone(), case.solver.clone()).expect("part simulation");
         let err = sim.run(&mut |_, _| {}).expect_err("a part without its ghosts fails");
         assert!(err.to_string().contains("ghost"), "rank {rank}: {err}");
+        // (at once: no cut-back changes the ghosts)
+        assert!(matches!(err, mpfem::solver::SolveError::StepFailed { dt, .. } if dt == case.time.dt), "rank {rank}: stopped after cut-backs: {err}");
     }
     format!("{size} ranks, rank {rank}: {nodes} of {} nodes, {elements} of {} elements, {} steps, largest difference {worst:.1e}", whole.n_nodes(), whole.elements.len(), parts.len())
 }

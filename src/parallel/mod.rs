@@ -12,7 +12,7 @@
 //!   and PETSc assembles the distributed tangent from each process's own and ghost rows
 //!   (`linalg::petsc::Rows::Part`) and solves it. No process holds the whole mesh or state.
 //!   For now: the barrier contact without ties, quasi-statics, no re-meshing, the ghosts chosen
-//!   when the part is made (a step fails naming the bodies when they no longer cover the
+//!   when the part is made (the run stops at once, naming the bodies, when they no longer cover the
 //!   contacts), and the library's API only (the command line runs the replicated model).
 //!   `tests/mpi_parts_run.rs` holds it to the whole serial run on 1–4 processes.
 //! - **The replicated model** (what `mpfem run` under `mpirun` does, below).

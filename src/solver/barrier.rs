@@ -295,8 +295,8 @@ impl Simulation {
     /// On a part: that its ghosts still hold every other process's body within `reach` of
     /// one of its own at `x` (the boxes of every process's bodies, gathered). The ghosts are
     /// chosen when the part is made; a body that comes within reach of one that is not its
-    /// ghost would miss pairs, so the step fails naming them (rebuilding the part during a
-    /// run is not done yet). Nothing to check without a part.
+    /// ghost would miss pairs, so the run stops at once ([`NewtonFailure::Part`]) naming them
+    /// (rebuilding the part during a run is not done yet). Nothing to check without a part.
     fn check_ghosts(&self, x: &[[f64; 2]], reach: f64) -> Result<(), NewtonFailure> {
         let Some(p) = &self.sys.part else { return Ok(()) };
         // (global body, box) of its own bodies, then every process's
@@ -321,14 +321,17 @@ impl Simulation {
             local[g] = true;
         }
         let missing = match partition::particle_graph(&boxes, partition::Adjacency::Proximity { gap: reach }) {
-            Ok(graph) => p.bodies[..p.own_bodies].iter().find_map(|&a| graph.neighbors(a).iter().find(|&&c| known[c] && !local[c]).map(|&c| (a, c))),
-            Err(e) => return self.sys.agree_part(Err(NewtonFailure::Contact(format!("the ghost layer's check: {e}"))), "the ghost layer's check failed"),
+            Ok(graph) => p.bodies[..p.own_bodies].iter().find_map(|&a| graph.neighbors(a).iter().find(|&&c| known[c] && !local[c]).map(|&c| Ok((a, c)))),
+            Err(e) => Some(Err(format!("the ghost layer's check: {e}"))),
         };
-        let r = match missing {
-            Some((a, c)) => Err(NewtonFailure::Contact(format!("body {c} came within {reach:.3e} mm of body {a} of process {} but is not one of its ghosts (the part's ghosts are chosen when it is made)", self.sys.comm.rank()))),
+        // (every process stops alike, each naming what it found)
+        let failed = self.sys.any(missing.is_some());
+        match missing {
+            Some(Ok((a, c))) => Err(NewtonFailure::Part(format!("body {c} came within {reach:.3e} mm of body {a} of process {} but is not one of its ghosts (the part's ghosts are chosen when it is made; rebuilding them during a run is not done yet)", self.sys.comm.rank()))),
+            Some(Err(e)) => Err(NewtonFailure::Part(e)),
+            None if failed => Err(NewtonFailure::Part("a ghost layer no longer covers its contacts on another process".into())),
             None => Ok(()),
-        };
-        self.sys.agree_part(r, "a ghost layer no longer covers its contacts")
+        }
     }
 
     /// The barrier terms at coordinates `x` (the walls where they are in the step): evaluated,

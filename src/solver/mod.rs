@@ -92,6 +92,10 @@ pub enum NewtonFailure {
     /// abandoned.
     #[error("interrupted")]
     Interrupted,
+    /// A distributed part can no longer go on as it is (its ghosts no longer cover its
+    /// contacts): no shorter step helps, the run stops (on every process alike).
+    #[error("distributed part: {0}")]
+    Part(String),
 }
 
 /// The stop reason [`Simulation::run_controlled`] gives when a stop asked for during a step

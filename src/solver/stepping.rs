@@ -201,6 +201,10 @@ impl Simulation {
                     }
                 }
             }
+            if let Err(cause @ NewtonFailure::Part(_)) = result {
+                // (no retry or cut-back changes a part's ghosts: the run stops at once)
+                return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause });
+            }
             let descent_retry = self.barrier.as_ref().is_some_and(|b| !b.descent) && !matches!(result, Err(NewtonFailure::Element(_)));
             if let Err(NewtonFailure::Interrupted) = result {
                 // abandoned: the last converged state as the step found it (the contact
