@@ -31,47 +31,14 @@ use mpfem::model::Model;
 use mpfem::parallel::part::RankPart;
 use mpfem::solver::{Simulation, StepReport};
 
-const CASE: &str = r#"title = "3 x 3 discs, barrier, parts"
-[[materials]]
-name = "alu"
-model = "elastic"
-youngs_modulus = 64100.0
-poisson_ratio = 0.3
-[[walls]]
-side = "left"
-position = 0.0
-velocity = 10.0
-[[walls]]
-side = "right"
-position = 100.0
-velocity = 10.0
-[[walls]]
-side = "bottom"
-position = 0.0
-[[walls]]
-side = "top"
-position = 100.0
-[[grids]]
-material = "alu"
-nx = 3
-ny = 3
-shape = "disc"
-solid_ratio = 0.76
-mesh_size = 5.0
-[contact]
-contact = "sliding"
-[stop]
-solid_ratio = 0.80
-[time]
-end = 3.0
-dt = 0.05
-dt_max = 0.1
-dt_min = 1e-5
-[solver]
-residual_tol = 1e-11
-[output]
-every = 0
-"#;
+/// The elastic, frictionless 3 × 3 discs of the MPI tests, with the barrier contact and the
+/// default solver (`tests/data/mpi_discs_3x3_pcg.toml` less its penalty method and PCG).
+fn case_text() -> String {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3_pcg.toml")).expect("the case");
+    let case = text.replace("method = \"penalty\"\n", "").replace("linear = \"pcg\"\npreconditioner = \"schwarz\"\npcg_tol = 1e-12\n", "");
+    assert!(!case.contains("penalty") && !case.contains("pcg"), "the case's solver lines changed:\n{case}");
+    case
+}
 
 /// The compared columns of a report: solid ratio, wall pressures and forces.
 fn row(r: &StepReport) -> Vec<f64> {
@@ -90,9 +57,10 @@ fn run(sim: &mut Simulation) -> Vec<Vec<f64>> {
 
 fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
     let _petsc = mpfem::linalg::petsc::start("").expect("PETSc");
-    let friction = CASE.replace("[contact]\ncontact = \"sliding\"\n", "[contact]\ncontact = \"rubbing\"\nfriction = 0.2\n");
-    assert_ne!(friction, CASE);
-    let frictionless = compare(comm.clone(), CASE, FRICTIONLESS_TOL, true);
+    let case = case_text();
+    let friction = case.replace("[contact]\ncontact = \"sliding\"\n", "[contact]\ncontact = \"rubbing\"\nfriction = 0.2\n");
+    assert_ne!(friction, case);
+    let frictionless = compare(comm.clone(), &case, FRICTIONLESS_TOL, true);
     let rubbing = compare(comm, &friction, FRICTION_TOL, false);
     format!("{frictionless}; with friction 0.2: {rubbing}")
 }

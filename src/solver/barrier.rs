@@ -300,11 +300,7 @@ impl Simulation {
     fn check_ghosts(&self, x: &[[f64; 2]], reach: f64) -> Result<(), NewtonFailure> {
         let Some(p) = &self.sys.part else { return Ok(()) };
         // (global body, box) of its own bodies, then every process's
-        let mut mine = Vec::with_capacity(5 * p.own_bodies);
-        for (k, b) in self.model.bodies.iter().take(p.own_bodies).enumerate() {
-            let (lo, hi) = x[b.node_offset..b.node_offset + b.mesh.n_nodes()].iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), q| ([lo[0].min(q[0]), lo[1].min(q[1])], [hi[0].max(q[0]), hi[1].max(q[1])]));
-            mine.extend_from_slice(&[p.bodies[k] as f64, lo[0], lo[1], hi[0], hi[1]]);
-        }
+        let mine: Vec<f64> = crate::distribute::particles_at(&self.model, x).iter().zip(&p.bodies).take(p.own_bodies).flat_map(|(b, &g)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect();
         let all = self.sys.comm.all_gather_varcount(&mine);
         let n = self.model.whole_facts().n_bodies;
         let mut boxes = vec![partition::Particle { elements: 0, min: [0.0; 2], max: [0.0; 2] }; n];

@@ -197,7 +197,7 @@ impl Simulation {
     /// # Errors
     /// What the part cannot take (above), or what [`Simulation::new`] refuses.
     pub fn new_part(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
-        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole, .. } = part;
+        let model = &part.model;
         let unsupported = if model.contact.method != crate::contact::ContactMethod::Barrier {
             Some("a contact method other than the barrier")
         } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
@@ -213,10 +213,9 @@ impl Simulation {
             return Err(SolveError::Contact(format!("a distributed part does not take {what} yet")));
         }
         let (eq, _) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
-        let comm = nodes.comm_arc();
-        let part = crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole: Default::default(), whole_eq: Vec::new() };
+        let comm = part.nodes.comm_arc();
         let eqs = part.equation_map(&eq).map_err(|e| SolveError::Linear(LinalgError::Other(e.to_string())))?;
-        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, .. } = part;
+        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole } = part;
         let own_dofs = 2 * nodes.n_owned();
         let own_eqs = eqs.n_owned();
         // the whole model's equation of each of the part's equations
