@@ -57,11 +57,6 @@ const OLDEST_VERSION: u32 = 1;
 const USERBLOCK: u64 = 512;
 const SEAL: &[u8] = b"mpfem checkpoint sha256 ";
 
-fn sha256_hex(bytes: &[u8]) -> String {
-    use sha2::Digest;
-    sha2::Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
-}
-
 /// Write the whole-file checksum of the checkpoint at `path` (made with a [`USERBLOCK`]) into
 /// its user block: [`SEAL`], the SHA-256 of the bytes after the block in hexadecimal, a new
 /// line. Public for tests that edit a checkpoint on purpose.
@@ -70,10 +65,8 @@ fn sha256_hex(bytes: &[u8]) -> String {
 /// The I/O error when the file cannot be read or written.
 pub fn seal(path: &Path) -> std::io::Result<()> {
     use std::io::{Seek, SeekFrom, Write};
-    let bytes = std::fs::read(path)?;
-    let body = bytes.get(USERBLOCK as usize..).ok_or_else(|| std::io::Error::other("shorter than its user block"))?;
     let mut head = SEAL.to_vec();
-    head.extend_from_slice(sha256_hex(body).as_bytes());
+    head.extend_from_slice(body_sha256(path)?.as_bytes());
     head.push(b'\n');
     let mut f = std::fs::OpenOptions::new().write(true).open(path)?;
     f.seek(SeekFrom::Start(0))?;
@@ -81,17 +74,42 @@ pub fn seal(path: &Path) -> std::io::Result<()> {
     f.sync_all()
 }
 
+/// The SHA-256 (hexadecimal) of the bytes of the file at `path` after its [`USERBLOCK`], read
+/// in pieces (a checkpoint of a large run is not held in memory whole).
+///
+/// # Errors
+/// The I/O error when the file cannot be read, or is shorter than its user block.
+fn body_sha256(path: &Path) -> std::io::Result<String> {
+    use sha2::Digest;
+    use std::io::{Read, Seek, SeekFrom};
+    let mut f = std::fs::File::open(path)?;
+    if f.metadata()?.len() < USERBLOCK {
+        return Err(std::io::Error::other("shorter than its user block"));
+    }
+    f.seek(SeekFrom::Start(USERBLOCK))?;
+    let mut hasher = sha2::Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+    }
+    Ok(hasher.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
 /// Whether the file carries a seal (false: a checkpoint of format 1, or one whose seal is
 /// gone); Err naming the mismatch when its bytes are not the ones sealed.
 fn check_seal(path: &Path) -> Result<bool, String> {
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    if !bytes.starts_with(SEAL) {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(SEAL.len() + 64);
+    std::fs::File::open(path).and_then(|f| f.take((SEAL.len() + 64) as u64).read_to_end(&mut head)).map_err(|e| e.to_string())?;
+    if !head.starts_with(SEAL) {
         return Ok(false);
     }
-    let n = SEAL.len();
-    let stored = bytes.get(n..n + 64).and_then(|h| std::str::from_utf8(h).ok()).unwrap_or("");
-    let body = bytes.get(USERBLOCK as usize..).unwrap_or(&[]);
-    let actual = sha256_hex(body);
+    let stored = std::str::from_utf8(&head[SEAL.len()..]).unwrap_or("");
+    let actual = body_sha256(path).map_err(|e| e.to_string())?;
     if stored != actual {
         return Err(format!("checksum mismatch of the whole file (SHA-256 {actual}, sealed {stored}): the file was changed or damaged after it was written"));
     }
