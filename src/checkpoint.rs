@@ -195,15 +195,23 @@ fn flat_usize<const N: usize>(v: &[[usize; N]]) -> Vec<u64> {
 /// [`CheckpointError::Write`] when the file cannot be written; the previous checkpoint is
 /// then still in place.
 pub fn write<T: Serialize>(dir: &Path, sim: &Simulation, case_sha256: &str, run: &T) -> Result<PathBuf, CheckpointError> {
+    write_state(dir, &sim.model, &sim.state(), case_sha256, run)
+}
+
+/// [`write`] for `state` on `model` (a distributed run's state gathered onto the whole model
+/// it was made from, [`Simulation::gather`]).
+///
+/// # Errors
+/// As [`write`].
+pub fn write_state<T: Serialize>(dir: &Path, model: &Model, state: &SimState, case_sha256: &str, run: &T) -> Result<PathBuf, CheckpointError> {
     let path = dir.join(FILE_NAME);
     let tmp = dir.join(format!("{FILE_NAME}.tmp"));
     let werr = |reason: String| CheckpointError::Write { path: path.clone(), reason };
-    let state = sim.state();
     let scalars = cbor(&state.scalars).map_err(&werr)?;
     let run = cbor(run).map_err(&werr)?;
     {
         let f = crate::h5::create_with_userblock(&tmp, USERBLOCK).map_err(h5err(&tmp))?;
-        write_h5(&f, sim, &state, case_sha256, &scalars, &run).map_err(h5err(&tmp))?;
+        write_h5(&f, model, state, case_sha256, &scalars, &run).map_err(h5err(&tmp))?;
         f.flush().map_err(h5err(&tmp))?;
         f.close().map_err(h5err(&tmp))?;
     }
@@ -218,7 +226,7 @@ pub fn write<T: Serialize>(dir: &Path, sim: &Simulation, case_sha256: &str, run:
     Ok(path)
 }
 
-fn write_h5(f: &hdf5::File, sim: &Simulation, st: &SimState, case_sha256: &str, scalars: &[u8], run: &[u8]) -> hdf5::Result<()> {
+fn write_h5(f: &hdf5::File, model: &Model, st: &SimState, case_sha256: &str, scalars: &[u8], run: &[u8]) -> hdf5::Result<()> {
     use hdf5::types::VarLenUnicode;
     let text = |s: &str| -> hdf5::Result<VarLenUnicode> { s.parse().map_err(|e| hdf5::Error::from(format!("{e}"))) };
     let step = st.scalars.run.step as u64;
@@ -272,7 +280,7 @@ fn write_h5(f: &hdf5::File, sim: &Simulation, st: &SimState, case_sha256: &str, 
         }
     }
     let meshes = f.create_group("meshes")?;
-    for (b, body) in sim.model.bodies.iter().enumerate() {
+    for (b, body) in model.bodies.iter().enumerate() {
         let m = &body.mesh;
         let g = meshes.create_group(&format!("{b:06}"))?;
         g.new_attr::<VarLenUnicode>().create("name")?.write_scalar(&text(&body.name)?)?;

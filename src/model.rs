@@ -144,8 +144,10 @@ pub struct PartMap {
 /// stiffness), which its own bodies alone would give differently on each process.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WholeModel {
-    /// Bodies of the whole model.
+    /// Bodies, nodes and elements of the whole model.
     pub n_bodies: usize,
+    pub n_nodes: usize,
+    pub n_elements: usize,
     /// Smallest contact length h of its bodies (mm, [`Body::contact_h`]).
     pub h_min: f64,
     /// Smallest Young's modulus of its bodies (MPa).
@@ -197,6 +199,8 @@ impl Model {
     pub fn whole_facts(&self) -> WholeModel {
         self.whole.unwrap_or_else(|| WholeModel {
             n_bodies: self.bodies.len(),
+            n_nodes: self.x0.len(),
+            n_elements: self.elements.len(),
             h_min: self.bodies.iter().map(|b| b.contact_h).fold(f64::INFINITY, f64::min),
             e_min: self.bodies.iter().map(|b| self.materials[b.material].youngs_modulus()).fold(f64::INFINITY, f64::min),
             extent: self.x0.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max),

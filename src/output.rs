@@ -3,7 +3,7 @@
 //! also when the run fails, with the status and the error).
 
 use crate::model::Model;
-use crate::solver::{RunSummary, Simulation, StepReport};
+use crate::solver::{RunSummary, Snapshot, StepReport};
 use serde::Serialize;
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -193,10 +193,10 @@ pub fn probe_columns(model: &Model) -> Vec<String> {
 /// through the four Gauss points, [`crate::element::from_gauss_points`]). A node probe: the
 /// node's own displacement, and the mean over the elements at the node of their Gauss-point
 /// fields extrapolated to it.
-pub fn probe_values(sim: &Simulation) -> Vec<f64> {
+pub fn probe_values(sim: &Snapshot) -> Vec<f64> {
     use crate::element::{corner, from_gauss_points, shape};
     use crate::model::ProbeAt;
-    let (model, u, f) = (&sim.model, &sim.sol.u, &sim.sol.fields);
+    let (model, u, f) = (sim.model, &sim.sol.u, &sim.sol.fields);
     // the element's fields at (ξ, η): [sxx, syy, sxy, szz, peeq, ceeq]
     let fields = |e: usize, xi: [f64; 2]| -> [f64; 6] {
         let mut out = [0.0; 6];
@@ -267,7 +267,7 @@ impl ProbeWriter {
     }
 
     /// The row of the converged step `r` of `sim`.
-    pub fn write(&mut self, sim: &Simulation, r: &StepReport) -> std::io::Result<()> {
+    pub fn write(&mut self, sim: &Snapshot, r: &StepReport) -> std::io::Result<()> {
         let mut values = vec![r.step as f64, r.time];
         values.extend(probe_values(sim));
         self.table.write(&values)

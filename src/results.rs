@@ -26,7 +26,7 @@
 //!   (n_nodes × 3, N/mm: the force the contacts exert on the node) and `wall_force`
 //!   (n_nodes × 4, N/mm: the normal force the node exerts on the left, right, bottom and top
 //!   wall; its column sums are `f_left` … `f_top` of the history). With the barrier contact
-//!   (`crate::solver::Simulation::nodal_contact`): the gap is the distance the barrier
+//!   (`crate::solver::Snapshot::nodal`): the gap is the distance the barrier
 //!   acts on (positive; NaN beyond d̂), the status 0 / 1 / 2 / 3 as above (sticking: a slip
 //!   of the step below ε_v), the force that of the barrier, the friction and the ties;
 //! - when the model has walls: `wall_points` (2 n_walls × 2, f64, mm) and `wall_cells`
@@ -46,7 +46,7 @@
 //! are in `results.h5`.
 
 use crate::loading::WallSide;
-use crate::solver::{Simulation, StepReport};
+use crate::solver::{Snapshot, StepReport};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -242,7 +242,7 @@ impl ResultsWriter {
 
     /// Write the step of `report` when its number is a multiple of the output frequency.
     /// Returns whether it was written.
-    pub fn observe(&mut self, sim: &Simulation, report: &StepReport) -> Result<bool, ResultsError> {
+    pub fn observe(&mut self, sim: &Snapshot, report: &StepReport) -> Result<bool, ResultsError> {
         self.append_history(report)?;
         if report.step % self.every == 0 {
             self.write_step(sim, report.step, report.time)?;
@@ -253,7 +253,7 @@ impl ResultsWriter {
 
     /// Append the history row of `report` to `/history` (flushed at the next output step, or
     /// at once when output steps are rare).
-    fn append_history(&mut self, report: &StepReport) -> Result<(), ResultsError> {
+    pub fn append_history(&mut self, report: &StepReport) -> Result<(), ResultsError> {
         let row = crate::output::history_values(report);
         let (n, m) = (self.history_rows, self.history_columns);
         if row.len() != m {
@@ -279,7 +279,7 @@ impl ResultsWriter {
     /// is already written: call once after the run so that the last step is always there.
     pub fn finish(
         &mut self,
-        sim: &Simulation,
+        sim: &Snapshot,
         last: Option<&StepReport>,
     ) -> Result<(), ResultsError> {
         let Some(r) = last else { return Ok(()) };
@@ -293,14 +293,14 @@ impl ResultsWriter {
     /// file and rewrite the XDMF file.
     pub fn write_step(
         &mut self,
-        sim: &Simulation,
+        sim: &Snapshot,
         step: usize,
         time: f64,
     ) -> Result<(), ResultsError> {
         let started = std::time::Instant::now();
-        let model = &sim.model;
+        let model = sim.model;
         let u = &sim.sol.u;
-        let x = sim.coords(u);
+        let x = sim.coords();
         let n_nodes = x.len();
         let n_cells = model.elements.len();
         let coords: Vec<f64> = x.iter().flat_map(|p| [p[0], p[1]]).collect();
@@ -316,7 +316,7 @@ impl ResultsWriter {
         let velocity: Vec<f64> = (0..n_nodes)
             .flat_map(|n| [vel[2 * n], vel[2 * n + 1], 0.0])
             .collect();
-        let contact = sim.nodal_contact().filter(|c| c.pressure.len() == n_nodes).map(|c| {
+        let contact = sim.nodal.filter(|c| c.pressure.len() == n_nodes).map(|c| {
             let mut wall_force = vec![0.0; 4 * n_nodes];
             for (w, f) in model.loading.walls.iter().zip(&c.wall_force) {
                 let side = w.side.index();

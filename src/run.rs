@@ -24,7 +24,7 @@ use crate::output::{write_summary, FinalState, HistoryWriter, Phases, ProbeWrite
 use crate::comm::Collective;
 use crate::plot::{PlotReport, PlotRequest};
 use crate::results::{ResultsError, ResultsWriter};
-use crate::solver::{RunSummary, Simulation, SolveError, StepReport};
+use crate::solver::{RunSummary, SimState, Simulation, SolveError, StepReport};
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -330,10 +330,11 @@ pub fn copy_run_files(from: &Path, to: &Path) -> Result<(), RunError> {
     Ok(())
 }
 
-/// Write the checkpoint of `sim`, whose last converged step is `at` (step, time), and say so:
-/// false when it could not be written (a warning says why; the previous one stays).
-fn checkpoint_now(out: &Path, sim: &Simulation, sha: &str, state: &RunState, at: (usize, f64), reporter: &dyn Reporter) -> bool {
-    match crate::checkpoint::write(out, sim, sha, state) {
+/// Write the checkpoint of `state` on `model`, whose last converged step is `at` (step,
+/// time), and say so: false when it could not be written (a warning says why; the previous
+/// one stays).
+fn checkpoint_now(out: &Path, model: &Model, sim: &SimState, sha: &str, state: &RunState, at: (usize, f64), reporter: &dyn Reporter) -> bool {
+    match crate::checkpoint::write_state(out, model, sim, sha, state) {
         Ok(p) => {
             reporter.note(Note::Info, &format!("checkpoint at step {}, t = {} s: {}", at.0, seconds(at.1), p.display()));
             true
@@ -513,12 +514,29 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     } else {
         None
     };
-    if !root {
-        return run_rank(&c, comm, checkpoint);
+    // with PETSc on several processes each holds its own particles and their neighbours
+    // (owned + ghost parts, `Simulation::new_part`); a model a part does not take yet runs
+    // replicated, every process holding all of it, as before
+    let mut whole = None;
+    if _petsc.is_some() && comm.size() > 1 {
+        if let Ok(m) = Model::from_case(&c) {
+            match Simulation::part_refusal(&m, &c.time) {
+                None => whole = Some(m),
+                Some(what) if root => reporter.note(Note::Info, &format!("every MPI rank holds the whole model: a distributed part does not take {what} yet")),
+                Some(_) => {}
+            }
+        }
     }
+    if !root {
+        return match whole {
+            Some(m) => run_part_rank(&c, m, comm, checkpoint),
+            None => run_rank(&c, comm, checkpoint),
+        };
+    }
+    let parts = whole.is_some();
     // (held until the run returns)
     let _lock = lock;
-    let model = match Model::from_case(&c) {
+    let model = match whole.take().map_or_else(|| Model::from_case(&c), Ok) {
         Ok(m) => m,
         Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
     };
@@ -534,8 +552,14 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let title = c.title.clone();
     let started = Instant::now();
     let ranks = comm.size();
-    let (mut sim, resumed) = match checkpoint {
-        None => (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None),
+    // (on parts, rank 0 keeps the whole model for the output: the state is gathered onto it
+    // at the output steps)
+    let (mut sim, resumed, whole) = match checkpoint {
+        None if parts => match part_simulation(&model, &c, &comm, None) {
+            Ok(sim) => (sim, None, Some(model)),
+            Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
+        },
+        None => (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None, None),
         Some(ck) => {
             let (step, time, path) = (ck.step, ck.time, ck.path.clone());
             let state: RunState = match ck.run_state() {
@@ -546,27 +570,34 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
                 _ => PathBuf::from("."),
             };
-            let sim = match ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)) {
+            let restored = if parts {
+                ck.model(model).map_err(|e| e.to_string()).and_then(|whole| part_simulation(&whole, &c, &comm, Some(ck.state)).map(|sim| (sim, Some(whole))))
+            } else {
+                ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)).map(|sim| (sim, None)).map_err(|e| e.to_string())
+            };
+            let (sim, whole) = match restored {
                 Ok(s) => s,
                 Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
             };
             copy_run_files(&from, out)?;
             reporter.note(Note::Info, &format!("restarting from {} at step {step}, t = {} s", path.display(), seconds(time)));
-            (sim, Some((step, time, path, state)))
+            (sim, Some((step, time, path, state)), whole)
         }
     };
-    let columns = crate::output::history_columns(&sim.model);
+    // the model the output is written on: the whole one (a part's is its process's share)
+    let shown = whole.as_ref().unwrap_or(&sim.model);
+    let columns = crate::output::history_columns(shown);
     let every = c.output.every;
     let (mut history, mut results) = match &resumed {
         None => (
-            HistoryWriter::create(out, &sim.model).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: false, source })?,
+            HistoryWriter::create(out, shown).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: false, source })?,
             match every {
                 0 => None,
                 every => Some(ResultsWriter::create(out, every, &columns).map_err(|source| RunError::Results { dir: out.to_path_buf(), continued: false, source })?),
             },
         ),
         Some((step, ..)) => (
-            HistoryWriter::open_append(out, &sim.model, *step).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: true, source })?,
+            HistoryWriter::open_append(out, shown, *step).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: true, source })?,
             match every {
                 0 => None,
                 every => Some(ResultsWriter::open_append(out, every, &columns, *step).map_err(|source| RunError::Results { dir: out.to_path_buf(), continued: true, source })?),
@@ -574,23 +605,24 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         ),
     };
     // (the history's path, and the probes' beside it, for the closing lines)
-    let history_files = if sim.model.probes.is_empty() { history.path.display().to_string() } else { format!("{}, {}", history.path.display(), out.join("probes.csv").display()) };
+    let history_files = if shown.probes.is_empty() { history.path.display().to_string() } else { format!("{}, {}", history.path.display(), out.join("probes.csv").display()) };
     let mut probes = match &resumed {
-        None => ProbeWriter::create(out, &sim.model),
-        Some((step, ..)) => ProbeWriter::open_append(out, &sim.model, *step),
+        None => ProbeWriter::create(out, shown),
+        Some((step, ..)) => ProbeWriter::open_append(out, shown, *step),
     }
     .map_err(|source| RunError::Probes { dir: out.to_path_buf(), continued: resumed.is_some(), source })?;
     // pictures of an earlier run in the same folder would not match the new results
     crate::plot::remove_old_plots(out);
     let on_ranks = match ranks {
         1 => String::new(),
+        _ if parts => format!(", {ranks} MPI ranks (each its own particles and their neighbours, solve distributed)"),
         _ if sim.solves_distributed() => format!(", {ranks} MPI ranks (solve distributed)"),
         _ => format!(", {ranks} MPI ranks (solve on rank 0)"),
     };
     let start = format!(
         "{label}: \"{title}\" — {n_bodies} body(ies), {} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
-        sim.model.elements.len(),
-        sim.n_free(),
+        shown.elements.len(),
+        if parts { crate::assembly::number_equations(shown.n_dofs(), shown.loading.prescribed.iter().map(|p| p.dof)).1 } else { sim.n_free() },
         sim.linear_solver_name(),
         c.time.end
     );
@@ -613,7 +645,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let restarts = earlier.restarts.clone();
     // the pressure–density curve for the compaction-law fits: the mean pressure of the moving
     // walls (of every loaded wall when none moves)
-    let pressing = sim.model.loading.pressing_sides();
+    let pressing = shown.loading.pressing_sides();
+    let has_probes = !shown.probes.is_empty();
     let mut curve: Vec<CurvePoint> = std::mem::take(&mut earlier.curve);
     // checkpoints: every `checkpoint_every` steps, every `checkpoint_minutes`, and after the
     // step in which the stop flag was set
@@ -646,16 +679,33 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 curve.push(CurvePoint { solid_ratio: c.solid_ratio, pressure: loaded.iter().sum::<f64>() / loaded.len() as f64 });
             }
         }
+        // every rank stops after the same step, and checkpoints it together: rank 0's flags
+        // decide (see `run_rank`, `run_part_rank`)
+        let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
+        let (signal, due) = step_flags(&*comm, opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst)), due);
+        // a part's state gathered onto the whole model, when something is written from it
+        let gathered = if parts && part_output_due(r.step, every, has_probes, signal, due) { s.gather() } else { None };
+        let snap = match (&gathered, &whole) {
+            (Some(g), Some(w)) => Some(g.snapshot(w)),
+            _ if parts => None,
+            _ => Some(s.snapshot()),
+        };
         let t_out = Instant::now();
         if let Err(e) = history.write(r) {
             io_error.get_or_insert(e);
         }
-        if let Some(Err(e)) = probes.as_mut().map(|p| p.write(s, r)) {
-            io_error.get_or_insert(e);
+        if let (Some(p), Some(snap)) = (probes.as_mut(), &snap) {
+            if let Err(e) = p.write(snap, r) {
+                io_error.get_or_insert(e);
+            }
         }
         history_s += t_out.elapsed().as_secs_f64();
         if let (Some(w), None) = (results.as_mut(), &results_error) {
-            if let Err(e) = w.observe(s, r) {
+            let written = match &snap {
+                Some(snap) => w.observe(snap, r).map(|_| ()),
+                None => w.append_history(r),
+            };
+            if let Err(e) = written {
                 results_error = Some(e);
             }
         }
@@ -673,14 +723,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             let done = progress(r.time, t_end, solid);
             reporter.step(&Progress { report: r, done, solid_ratio: phi, target, elapsed_s: started.elapsed().as_secs_f64() });
         }
-        let mut signal = opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
-        if comm.size() > 1 {
-            // every rank stops after the same step: rank 0's flag decides (see `run_rank`)
-            let mut stop = [signal as f64];
-            comm.broadcast(&mut stop);
-            signal = stop[0] as usize;
-        }
-        let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
         if signal != 0 || due {
             let t0 = Instant::now();
             let state = RunState {
@@ -691,7 +733,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 history_s,
                 restarts: restarts.clone(),
             };
-            ckpt_failed = !checkpoint_now(out, s, &sha, &state, (r.step, r.time), reporter);
+            ckpt_failed = !match (&gathered, &whole) {
+                (Some(g), Some(w)) => checkpoint_now(out, w, &g.state, &sha, &state, (r.step, r.time), reporter),
+                _ => checkpoint_now(out, &s.model, &s.state(), &sha, &state, (r.step, r.time), reporter),
+            };
             if !ckpt_failed {
                 ckpt_written = Some(r.step);
             }
@@ -712,7 +757,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             s.stop_reason = format!("interrupted by {} (the step under way abandoned)", signal_name(signal));
             let t0 = Instant::now();
             let state = RunState { phi0, max_body_volume_error, curve: curve.clone(), wall_time_s: wall_before + started.elapsed().as_secs_f64(), history_s, restarts: restarts.clone() };
-            ckpt_failed = !checkpoint_now(out, &sim, &sha, &state, (s.steps, s.final_time), reporter);
+            ckpt_failed = !match (parts.then(|| sim.gather()).flatten(), &whole) {
+                (Some(g), Some(w)) => checkpoint_now(out, w, &g.state, &sha, &state, (s.steps, s.final_time), reporter),
+                _ => checkpoint_now(out, &sim.model, &sim.state(), &sha, &state, (s.steps, s.final_time), reporter),
+            };
             if !ckpt_failed {
                 ckpt_written = Some(s.steps);
             }
@@ -726,11 +774,18 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         reporter.note(Note::Warning, &format!("history.csv: {e}"));
     }
     // the last converged step is always in the results, also when the run failed after it
+    // (a part's state gathered whatever happened to the writer: every rank takes part)
+    let gathered = (parts && every > 0).then(|| sim.gather()).flatten();
     if let (Some(w), None) = (results.as_mut(), &results_error) {
-        if let Err(e) = w.finish(&sim, last_report.as_ref()) {
+        let snap = match (&gathered, &whole) {
+            (Some(g), Some(w)) => g.snapshot(w),
+            _ => sim.snapshot(),
+        };
+        if let Err(e) = w.finish(&snap, last_report.as_ref()) {
             results_error = Some(e);
         }
     }
+    drop(gathered);
     if let Some(e) = &results_error {
         reporter.note(Note::Warning, &format!("results: {e}; the steps written before are readable"));
     }
@@ -753,8 +808,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         n_bodies,
         // the meshes the run ended on: a restart's (its re-meshed particles come from the
         // checkpoint, whatever the case says) and every re-mesh's
-        n_nodes: sim.model.n_nodes(),
-        n_elements: sim.model.elements.len(),
+        n_nodes: whole.as_ref().unwrap_or(&sim.model).n_nodes(),
+        n_elements: whole.as_ref().unwrap_or(&sim.model).elements.len(),
         wall_time_s,
         final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
         phases: Phases::split(&sim.timing(), output_s, wall_time_s),
@@ -852,15 +907,88 @@ fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>)
     };
     // (rank 0's flag decides, also within a step: this one is never set)
     sim.set_interrupt(Arc::default());
-    let result = sim.run_controlled(&mut |_, _| {
-        let mut stop = [0.0];
-        comm.broadcast(&mut stop);
-        if stop[0] != 0.0 {
+    let result = sim.run_controlled(&mut |_, _| match step_flags(&*comm, 0, false) {
+        (0, _) => ControlFlow::Continue(()),
+        _ => ControlFlow::Break("interrupted on rank 0".into()),
+    });
+    Ok(match result {
+        Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
+        Ok(s) => RunOutcome::Completed(s),
+        Err(e) => RunOutcome::Failed(e),
+    })
+}
+
+/// After a converged step: rank 0's stop signal (0: none) and whether a checkpoint is due, the
+/// same on every process (broadcast from rank 0; the other ranks pass 0 and false).
+fn step_flags(comm: &dyn Collective, signal: usize, due: bool) -> (usize, bool) {
+    if comm.size() == 1 {
+        return (signal, due);
+    }
+    let mut flags = [signal as f64, if due { 1.0 } else { 0.0 }];
+    comm.broadcast(&mut flags);
+    (flags[0] as usize, flags[1] != 0.0)
+}
+
+/// Whether a distributed run's parts gather their state after step `step` (every process
+/// decides alike): for the probes, the results' output steps (`every`), a checkpoint, a stop.
+fn part_output_due(step: usize, every: usize, probes: bool, signal: usize, checkpoint: bool) -> bool {
+    probes || (every > 0 && step % every == 0) || signal != 0 || checkpoint
+}
+
+/// This process's part of `whole` as a simulation of case `c` ([`Simulation::new_part`]): from
+/// the start, or at the whole model's `state` (a checkpoint's, read on every process), with the
+/// ghosts where the particles are in it. Collective.
+fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: Option<SimState>) -> Result<Simulation, String> {
+    let x: Vec<[f64; 2]> = match &state {
+        Some(s) if s.sol.u.len() != whole.n_dofs() => return Err(format!("the checkpoint has {} displacement dofs, the model {}", s.sol.u.len(), whole.n_dofs())),
+        Some(s) => whole.x0.iter().enumerate().map(|(n, p)| [p[0] + s.sol.u[2 * n], p[1] + s.sol.u[2 * n + 1]]).collect(),
+        None => whole.x0.clone(),
+    };
+    let part = crate::parallel::part::RankPart::for_run(whole, &x, Arc::clone(comm)).map_err(|e| e.to_string())?;
+    let mut sim = Simulation::new_part(part, c.time.clone(), c.solver.clone()).map_err(|e| e.to_string())?;
+    if let Some(s) = state {
+        sim.set_whole_state(s)?;
+    }
+    Ok(sim)
+}
+
+/// Ranks 1..N of a run on parts ([`run`] on rank 0): the same part of the same model, the same
+/// collective steps of the output after every step (the flags of rank 0, the gathers), no
+/// output of their own. Returns what the run did; rank 0 says why a setup failed.
+fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+    let (every, probes) = (c.output.every, !whole.probes.is_empty());
+    let sim = match checkpoint {
+        None if !whole.outside_walls().is_empty() => return Ok(RunOutcome::BadInput("a particle outside the walls".into())),
+        None => part_simulation(&whole, c, &comm, None),
+        Some(ck) => match ck.run_state::<RunState>() {
+            Err(e) => Err(e.to_string()),
+            Ok(_) => ck.model(whole).map_err(|e| e.to_string()).and_then(|whole| part_simulation(&whole, c, &comm, Some(ck.state))),
+        },
+    };
+    let mut sim = match sim {
+        Ok(s) => s,
+        Err(e) => return Ok(RunOutcome::BadInput(e)),
+    };
+    // (rank 0's flag decides, also within a step: this one is never set)
+    sim.set_interrupt(Arc::default());
+    let result = sim.run_controlled(&mut |s, r| {
+        let (signal, due) = step_flags(&*comm, 0, false);
+        if part_output_due(r.step, every, probes, signal, due) {
+            s.gather();
+        }
+        if signal != 0 {
             ControlFlow::Break("interrupted on rank 0".into())
         } else {
             ControlFlow::Continue(())
         }
     });
+    // the gathers of rank 0's last checkpoint and output step, in its order
+    if matches!(&result, Ok(s) if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED) {
+        sim.gather();
+    }
+    if every > 0 {
+        sim.gather();
+    }
     Ok(match result {
         Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
         Ok(s) => RunOutcome::Completed(s),

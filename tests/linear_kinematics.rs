@@ -80,7 +80,7 @@ fn run(text: &str) -> Vec<(f64, Vec<f64>)> {
         let mut pts: Vec<[f64; 2]> = inner.iter().map(|&n| x0[n]).collect();
         pts.sort_by(|p, q| p[1].atan2(p[0]).total_cmp(&q[1].atan2(q[0])));
         let arc: f64 = pts.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
-        rows.push((force / arc, probe_values(s)));
+        rows.push((force / arc, probe_values(&s.snapshot())));
     })
     .unwrap();
     rows

@@ -32,7 +32,7 @@ fn run(text: &str) -> Vec<(f64, Vec<f64>, Vec<[f64; 2]>)> {
     let model = Model::from_case(&c).unwrap();
     let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
     let mut rows = Vec::new();
-    sim.run(&mut |s, r| rows.push((r.time, mpfem::output::probe_values(s), r.reactions.clone()))).unwrap();
+    sim.run(&mut |s, r| rows.push((r.time, mpfem::output::probe_values(&s.snapshot()), r.reactions.clone()))).unwrap();
     rows
 }
 
@@ -127,7 +127,7 @@ fn a_creep_bar_in_plane_stress_follows_eq_29() {
     let model = Model::from_case(&c).unwrap();
     let mut sim = Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
     let mut rows = Vec::new();
-    sim.run(&mut |s, r| rows.push((r.time, mpfem::output::probe_values(s), r.displacements[0]))).unwrap();
+    sim.run(&mut |s, r| rows.push((r.time, mpfem::output::probe_values(&s.snapshot()), r.displacements[0]))).unwrap();
     // eq. 29 with m = 0 and q frozen at each step's end: ε̄ᶜ += A (s q)ⁿ (t_jᵠ − t_{j−1}ᵠ)
     let (mut eps_c, mut t_prev, mut worst) = (0.0, 0.0, 0.0f64);
     for (t, v, u) in &rows {

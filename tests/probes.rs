@@ -45,7 +45,7 @@ fn a_probe_at_the_outer_radius_follows_hill() {
         let mut pts: Vec<[f64; 2]> = inner.iter().map(|&n| x[n]).collect();
         pts.sort_by(|p, q| p[1].atan2(p[0]).total_cmp(&q[1].atan2(q[0])));
         let arc: f64 = pts.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
-        rows.push((force / arc, probe_values(s), r.displacements[0]));
+        rows.push((force / arc, probe_values(&s.snapshot()), r.displacements[0]));
     })
     .unwrap();
     // u_b(p) up to 0.9 p_L; beyond, u_b(p) rises so steeply (dp/du_b → 0 at the limit) that the

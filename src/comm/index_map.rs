@@ -168,15 +168,24 @@ impl IndexMap {
     /// index). The owner adds what it receives process by process in rank order, each
     /// process's ghosts in their order, so the sums are the same on every run. Collective.
     pub fn reverse_add(&self, x: &mut [f64], bs: usize) {
+        self.reverse_with(x, bs, |owner, ghost| *owner += ghost);
+        let n = self.n_owned();
+        x[n * bs..].iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// Combine every ghost's value into its owner's with `op(owner, ghost)` (`bs` values per
+    /// local index), in rank order as [`IndexMap::reverse_add`]; the ghosts keep their values
+    /// (a forward scatter after it gives them the owners'). For reductions other than a sum:
+    /// the smallest gap of a node, the largest status. Collective.
+    pub fn reverse_with(&self, x: &mut [f64], bs: usize, op: impl Fn(&mut f64, f64)) {
         debug_assert_eq!(x.len(), self.n_local() * bs);
         let n = self.n_owned();
         let out: Vec<Vec<f64>> = self.recv.iter().map(|ks| ks.iter().flat_map(|&k| x[(n + k) * bs..(n + k + 1) * bs].iter().copied()).collect()).collect();
         let got = self.comm.exchange(&out);
-        x[n * bs..].iter_mut().for_each(|v| *v = 0.0);
         for (is, vals) in self.send.iter().zip(&got) {
             for (j, &i) in is.iter().enumerate() {
                 for c in 0..bs {
-                    x[i * bs + c] += vals[j * bs + c];
+                    op(&mut x[i * bs + c], vals[j * bs + c]);
                 }
             }
         }

@@ -108,6 +108,31 @@ pub struct RankPart {
 }
 
 impl RankPart {
+    /// This process's part of `whole` for a run: the bodies partitioned over the processes
+    /// by METIS ([`crate::distribute::partition_particles`], rank 0's partition broadcast),
+    /// the ghosts within [`RankPart::reach`] of its bodies at coordinates `x`. Collective.
+    ///
+    /// # Errors
+    /// As [`RankPart::new`].
+    pub fn for_run(whole: &Model, x: &[[f64; 2]], comm: Arc<dyn Collective>) -> Result<Self, PartError> {
+        let mut owner: Vec<f64> = crate::distribute::partition_particles(whole, comm.size()).iter().map(|&o| o as f64).collect();
+        comm.broadcast(&mut owner);
+        let owner: Vec<usize> = owner.iter().map(|&o| o as usize).collect();
+        Self::new(whole, x, &owner, Self::reach(whole), comm)
+    }
+
+    /// How far from its bodies a part takes other processes' bodies as ghosts: a quarter of
+    /// the median body's size, at least four of the smallest contact lengths h. The ghosts
+    /// must hold every body within d̂ + h of an own one at the start of every step (checked
+    /// then); the margin lets the particles move some steps before a new ghost is needed.
+    pub fn reach(whole: &Model) -> f64 {
+        let mut sizes: Vec<f64> = crate::distribute::particles(whole).iter().map(|p| (p.max[0] - p.min[0]).max(p.max[1] - p.min[1])).collect();
+        sizes.sort_by(f64::total_cmp);
+        let median = sizes.get(sizes.len() / 2).copied().unwrap_or(0.0);
+        let h = whole.whole_facts().h_min;
+        (0.25 * median).max(if h.is_finite() { 4.0 * h } else { 0.0 })
+    }
+
     /// This process's part of `whole`, whose bodies are owned by `owner` (every process's
     /// owners alike), with the ghosts within `reach` of its bodies at coordinates `x` (every
     /// node of `whole`). Collective.
@@ -231,7 +256,7 @@ impl RankPart {
 
 /// Rank 0's vector of `n` records of `bs` values, each process sending `(index, values)`
 /// records (every index once over the processes); None on the others.
-fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize) -> Option<Vec<f64>> {
+pub fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize) -> Option<Vec<f64>> {
     let mut buf = Vec::new();
     for (i, v) in records {
         buf.push(i as f64);

@@ -639,29 +639,64 @@ impl Simulation {
             out.wall_force[w.wall][w.node] -= w.term.grad[0] * n[0] + w.term.grad[1] * n[1];
             gap(&mut out.gap, w.node, w.distance);
         }
-        for n in 0..n_nodes {
-            if normal[n] != [0.0; 2] {
-                out.status[n] = 1;
-            }
-            out.force[n] = normal[n];
-        }
         let eps = FRICTION_EPS * b.h_min;
+        // the friction's and the ties' forces; whether each node sticks or is tied (its status
+        // is decided once the forces of every process's pairs are summed)
+        let mut force = normal.clone();
+        let mut flags = vec![0.0; 2 * n_nodes];
         for fp in &b.friction {
             let t = fp.term(u, &self.sol.u, eps);
             for i in 0..fp.width {
-                out.force[fp.dofs[i] / 2][fp.dofs[i] % 2] -= t.grad[i];
+                force[fp.dofs[i] / 2][fp.dofs[i] % 2] -= t.grad[i];
             }
             let slip: f64 = (0..fp.width).map(|i| fp.w[i] * (u[fp.dofs[i]] - self.sol.u[fp.dofs[i]])).sum();
-            if fp.mu_lambda > 0.0 && slip.abs() < eps && out.status[fp.node] > 0 {
-                out.status[fp.node] = out.status[fp.node].max(2);
+            if fp.mu_lambda > 0.0 && slip.abs() < eps {
+                flags[2 * fp.node] = 1.0;
             }
         }
         for tie in &b.contact.ties {
             let t = tie.term(&x, &b.contact.segments, b.tie_stiffness);
             for i in 0..6 {
-                out.force[tie.dofs[i] / 2][tie.dofs[i] % 2] -= t.grad[i];
+                force[tie.dofs[i] / 2][tie.dofs[i] % 2] -= t.grad[i];
             }
-            out.status[tie.node] = 3;
+            flags[2 * tie.node + 1] = 1.0;
+        }
+        if let Some(p) = &self.sys.part {
+            // a node's pairs are evaluated by the processes owning their first sides: its
+            // owner sums their forces, takes the smallest gap and any flag, and its ghosts get
+            // the owner's values
+            let nw = out.wall_force.len();
+            let bs = 4 + nw;
+            let mut sums: Vec<f64> = (0..n_nodes).flat_map(|n| [normal[n][0], normal[n][1], force[n][0], force[n][1]].into_iter().chain(out.wall_force.iter().map(move |w| w[n]))).collect();
+            p.nodes.reverse_add(&mut sums, bs);
+            p.nodes.forward(&mut sums, bs);
+            let mut least: Vec<f64> = (0..n_nodes).flat_map(|n| [out.gap[n], -flags[2 * n], -flags[2 * n + 1]]).collect();
+            p.nodes.reverse_with(&mut least, 3, |o, g| {
+                if !g.is_nan() && !(*o <= g) {
+                    *o = g;
+                }
+            });
+            p.nodes.forward(&mut least, 3);
+            for n in 0..n_nodes {
+                let r = &sums[n * bs..(n + 1) * bs];
+                normal[n] = [r[0], r[1]];
+                force[n] = [r[2], r[3]];
+                for (w, v) in out.wall_force.iter_mut().zip(&r[4..]) {
+                    w[n] = *v;
+                }
+                out.gap[n] = least[3 * n];
+                flags[2 * n] = -least[3 * n + 1];
+                flags[2 * n + 1] = -least[3 * n + 2];
+            }
+        }
+        for n in 0..n_nodes {
+            if normal[n] != [0.0; 2] {
+                out.status[n] = if flags[2 * n] > 0.0 { 2 } else { 1 };
+            }
+            if flags[2 * n + 1] > 0.0 {
+                out.status[n] = 3;
+            }
+            out.force[n] = force[n];
         }
         out.set_tractions(&x, &b.contact.segments);
         out

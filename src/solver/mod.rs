@@ -33,6 +33,7 @@ mod params;
 mod remeshing;
 mod report;
 mod saddle;
+mod snapshot;
 mod state;
 mod stepping;
 mod system;
@@ -40,6 +41,7 @@ mod system;
 pub use barrier::DESCENT_ITERATIONS;
 pub use params::{NewtonKind, SolverSpec, TimeSpec};
 pub use report::{Clock, Compaction, Phase, PhaseScope, RunSummary, StepReport, Timing};
+pub use snapshot::{Gathered, Snapshot};
 pub use state::{BarrierState, PartitionTotals, RunState, SimScalars, SimState, Solution};
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};
@@ -185,6 +187,22 @@ impl Simulation {
         Self::build_with(model, time, spec, comm, previous, None)
     }
 
+    /// What of `model` and `time` a distributed part ([`Simulation::new_part`]) does not take
+    /// yet, None when it takes them all.
+    pub fn part_refusal(model: &Model, time: &TimeSpec) -> Option<&'static str> {
+        if model.contact.method != crate::contact::ContactMethod::Barrier {
+            Some("a contact method other than the barrier")
+        } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
+            Some("cohering particles (the barrier's ties)")
+        } else if model.remesh.enabled {
+            Some("re-meshing")
+        } else if time.integrator != crate::dynamics::Integrator::Static {
+            Some("implicit dynamics")
+        } else {
+            None
+        }
+    }
+
     /// The simulation of this process's part of a distributed model (the owned + ghost state,
     /// [`crate::parallel::part::RankPart`]): it holds the meshes and states of its own
     /// particles and of its ghosts only, evaluates the elements of its own particles and the
@@ -198,17 +216,7 @@ impl Simulation {
     /// What the part cannot take (above), or what [`Simulation::new`] refuses.
     pub fn new_part(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
         let model = &part.model;
-        let unsupported = if model.contact.method != crate::contact::ContactMethod::Barrier {
-            Some("a contact method other than the barrier")
-        } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
-            Some("cohering particles (the barrier's ties)")
-        } else if model.remesh.enabled {
-            Some("re-meshing")
-        } else if time.integrator != crate::dynamics::Integrator::Static {
-            Some("implicit dynamics")
-        } else {
-            None
-        };
+        let unsupported = Self::part_refusal(model, &time);
         if let Some(what) = unsupported {
             return Err(SolveError::Contact(format!("a distributed part does not take {what} yet")));
         }
@@ -225,7 +233,7 @@ impl Simulation {
                 eq_whole[q] = whole_eq.get(d).copied().unwrap_or(FIXED);
             }
         }
-        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, elements: whole.element };
+        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, whole };
         Self::build_with(model, time, spec, comm, None, Some(sys))
     }
 
@@ -629,13 +637,7 @@ impl Simulation {
     /// velocity with inertia, otherwise the step's mean velocity (u_n − u_{n−1})/Δt (zero
     /// before the first step).
     pub fn velocity(&self) -> Vec<f64> {
-        if let Some(dy) = self.dynamics.as_ref() {
-            return dy.v.clone();
-        }
-        if self.run.step == 0 || !(self.run.dt_prev > 0.0) {
-            return vec![0.0; self.sol.u.len()];
-        }
-        self.sol.u.iter().zip(&self.u_prev).map(|(a, b)| (a - b) / self.run.dt_prev).collect()
+        self.snapshot().velocity()
     }
 
     /// Solid ratio of the initial configuration (particle area / die area at t = 0), when four

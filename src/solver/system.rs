@@ -63,8 +63,9 @@ pub(super) struct PartSys {
     /// The whole model's equation of each of the part's equations (for what is defined on the
     /// whole model's equations: the saddle's pseudo-random start).
     pub eq_whole: Vec<usize>,
-    /// The whole model's element of each of the part's elements (to name a failed one).
-    pub elements: Vec<usize>,
+    /// The whole model's node and element of each of the part's nodes and elements (to name
+    /// a failed element, to gather the output).
+    pub whole: crate::model::PartMap,
 }
 
 /// The global system (see the module docs).
@@ -180,7 +181,7 @@ impl System {
         }
         let mut code = [0.0; 4];
         if let (true, Err(e)) = (first == rank, &local) {
-            let whole = crate::assembly::AssemblyError { element: p.elements.get(e.element).copied().unwrap_or(e.element), source: e.source.clone() };
+            let whole = crate::assembly::AssemblyError { element: p.whole.element.get(e.element).copied().unwrap_or(e.element), source: e.source.clone() };
             code = crate::parallel::encode_failure(&whole);
         }
         self.comm.sum_in_place(&mut code);

@@ -1,0 +1,224 @@
+//! What the output reads of a simulation after a converged step — its model, solution,
+//! previous displacement, counters and the contact's nodal values — as one borrowed view
+//! ([`Snapshot`]), whether the simulation holds the whole model ([`Simulation::snapshot`]) or
+//! a process's part of it, whose own nodes, elements and bodies rank 0 gathers into the whole
+//! model's numbering for the writing and drops after it ([`Simulation::gather`], [`Gathered`]).
+//! A restart on parts goes the other way: every process takes its nodes, elements and bodies
+//! out of the checkpoint's whole state ([`Simulation::set_whole_state`]).
+
+use super::{RunState, SimState, Simulation, Solution};
+use crate::assembly::ElementFields;
+use crate::contact::NodalContact;
+use crate::element::N_ENH;
+use crate::material::MatState;
+use crate::model::Model;
+
+/// A converged state as the output reads it (see the module docs).
+pub struct Snapshot<'a> {
+    pub model: &'a Model,
+    pub sol: &'a Solution,
+    /// u_{n−1}.
+    pub u_prev: &'a [f64],
+    pub run: &'a RunState,
+    /// The Newmark velocities of an implicit dynamic analysis.
+    pub dynamic_velocity: Option<&'a [f64]>,
+    /// The contact's nodal values at the converged state (None without contact).
+    pub nodal: Option<&'a NodalContact>,
+}
+
+impl Snapshot<'_> {
+    /// Current nodal coordinates x = X + u.
+    pub fn coords(&self) -> Vec<[f64; 2]> {
+        let u = &self.sol.u;
+        self.model.x0.iter().enumerate().map(|(n, p)| [p[0] + u[2 * n], p[1] + u[2 * n + 1]]).collect()
+    }
+
+    /// Nodal velocities of the last committed step (mm/s, dof `2 n + c`): the Newmark
+    /// velocity with inertia, otherwise the step's mean velocity (u_n − u_{n−1})/Δt (zero
+    /// before the first step).
+    pub fn velocity(&self) -> Vec<f64> {
+        if let Some(v) = self.dynamic_velocity {
+            return v.to_vec();
+        }
+        if self.run.step == 0 || !(self.run.dt_prev > 0.0) {
+            return vec![0.0; self.sol.u.len()];
+        }
+        self.sol.u.iter().zip(self.u_prev).map(|(a, b)| (a - b) / self.run.dt_prev).collect()
+    }
+}
+
+/// The whole state of a distributed run, gathered on rank 0 from the processes' parts: what
+/// [`Simulation::state`] and the contact's nodal values are for the whole model. Held only
+/// while the output is written.
+pub struct Gathered {
+    pub state: SimState,
+    pub nodal: Option<NodalContact>,
+}
+
+impl Gathered {
+    /// The view of this state on `whole`, the model the parts were made from.
+    pub fn snapshot<'a>(&'a self, whole: &'a Model) -> Snapshot<'a> {
+        Snapshot {
+            model: whole,
+            sol: &self.state.sol,
+            u_prev: &self.state.u_prev,
+            run: &self.state.scalars.run,
+            dynamic_velocity: self.state.dynamics.as_ref().map(|d| d[1].as_slice()),
+            nodal: self.nodal.as_ref(),
+        }
+    }
+}
+
+/// Values per element in a gathered record: the four Gauss points' material states (6 each)
+/// and stresses (4 each), pressure, Θ, the enhanced modes, λ and j₀.
+const ELEMENT_RECORD: usize = 4 * 6 + 4 * 4 + 2 + N_ENH + 2;
+
+fn element_record(sol: &Solution, e: usize, out: &mut Vec<f64>) {
+    let f = &sol.fields;
+    for q in &f.states[e] {
+        out.extend(q.cp_inv);
+        out.extend([q.eps_p, q.eps_c]);
+    }
+    for s in &f.sig[e] {
+        out.extend(s);
+    }
+    out.extend([f.pressure[e], f.theta[e]]);
+    out.extend(f.alpha[e]);
+    out.extend([sol.lambda[e], sol.j0[e]]);
+}
+
+/// The element fields, multipliers and j₀ of `n` elements from their records.
+fn from_element_records(v: &[f64], n: usize) -> (ElementFields, Vec<f64>, Vec<f64>) {
+    let mut f = ElementFields::new(n);
+    let (mut lambda, mut j0) = (vec![0.0; n], vec![1.0; n]);
+    for (e, r) in v.chunks_exact(ELEMENT_RECORD).enumerate().take(n) {
+        for g in 0..4 {
+            let q = &r[6 * g..6 * g + 6];
+            f.states[e][g] = MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
+            f.sig[e][g].copy_from_slice(&r[24 + 4 * g..24 + 4 * g + 4]);
+        }
+        f.pressure[e] = r[40];
+        f.theta[e] = r[41];
+        f.alpha[e].copy_from_slice(&r[42..42 + N_ENH]);
+        lambda[e] = r[42 + N_ENH];
+        j0[e] = r[43 + N_ENH];
+    }
+    (f, lambda, j0)
+}
+
+impl Simulation {
+    /// The view of this simulation's converged state the output reads.
+    pub fn snapshot(&self) -> Snapshot<'_> {
+        Snapshot {
+            model: &self.model,
+            sol: &self.sol,
+            u_prev: &self.u_prev,
+            run: &self.run,
+            dynamic_velocity: self.dynamics.as_ref().map(|d| d.v.as_slice()),
+            nodal: self.nodal_contact(),
+        }
+    }
+
+    /// Whether this simulation is a process's part of a distributed model
+    /// ([`Simulation::new_part`]).
+    pub fn is_part(&self) -> bool {
+        self.sys.part.is_some()
+    }
+
+    /// On a part: rank 0's whole state in the whole model's numbering (nodes, elements and
+    /// bodies from the processes owning them; the counters, energies and contact parameters,
+    /// which every process holds alike, rank 0's), None on the other processes. Without a
+    /// part: the state itself. Collective on a part.
+    pub fn gather(&self) -> Option<Gathered> {
+        let Some(p) = &self.sys.part else {
+            return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned() });
+        };
+        let comm = p.nodes.comm();
+        let whole = self.model.whole_facts();
+        let n_own = p.nodes.n_owned();
+        let nodal = self.nodal_contact().filter(|c| c.pressure.len() == self.model.x0.len());
+        let nw = nodal.map_or(0, |c| c.wall_force.len());
+        // (every process has the nodal values when one has: they are set at every commit)
+        let with_nodal = comm.max(if nodal.is_some() { 1.0 } else { 0.0 }) > 0.0;
+        let node_bs = 4 + if with_nodal { 6 + comm.max(nw as f64) as usize } else { 0 };
+        let mut local = Vec::with_capacity(n_own * node_bs);
+        for n in 0..n_own {
+            local.extend([self.sol.u[2 * n], self.sol.u[2 * n + 1], self.u_prev[2 * n], self.u_prev[2 * n + 1]]);
+            if with_nodal {
+                match nodal {
+                    Some(c) => {
+                        local.extend([c.pressure[n], c.shear.get(n).copied().unwrap_or(0.0), c.gap[n], f64::from(c.status[n]), c.force[n][0], c.force[n][1]]);
+                        local.extend(c.wall_force.iter().map(|w| w[n]));
+                    }
+                    None => local.extend(std::iter::repeat_n(0.0, node_bs - 4)),
+                }
+            }
+        }
+        let nodes = crate::parallel::part::gather_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, whole.n_nodes);
+        let own_elements: Vec<usize> = (0..self.model.elements.len()).filter(|&e| self.model.elem_body[e] < p.own_bodies).collect();
+        let mut local = Vec::with_capacity(own_elements.len() * ELEMENT_RECORD);
+        for &e in &own_elements {
+            element_record(&self.sol, e, &mut local);
+        }
+        let elements = crate::parallel::part::gather_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * ELEMENT_RECORD..(i + 1) * ELEMENT_RECORD])), ELEMENT_RECORD, whole.n_elements);
+        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies);
+        let (Some(nodes), Some(elements), Some(areas)) = (nodes, elements, areas) else { return None };
+        let nn = whole.n_nodes;
+        let mut state = self.state();
+        let (fields, lambda, j0) = from_element_records(&elements, whole.n_elements);
+        state.sol = Solution { time: self.sol.time, u: (0..nn).flat_map(|n| [nodes[n * node_bs], nodes[n * node_bs + 1]]).collect(), fields, lambda, j0 };
+        state.u_prev = (0..nn).flat_map(|n| [nodes[n * node_bs + 2], nodes[n * node_bs + 3]]).collect();
+        state.scalars.run.area0_body = areas;
+        state.scalars.run.remesh_baseline = vec![None; whole.n_bodies];
+        let nodal = with_nodal.then(|| {
+            let r = |n: usize| &nodes[n * node_bs + 4..(n + 1) * node_bs];
+            NodalContact {
+                pressure: (0..nn).map(|n| r(n)[0]).collect(),
+                shear: (0..nn).map(|n| r(n)[1]).collect(),
+                gap: (0..nn).map(|n| r(n)[2]).collect(),
+                status: (0..nn).map(|n| r(n)[3] as i32).collect(),
+                force: (0..nn).map(|n| [r(n)[4], r(n)[5]]).collect(),
+                wall_force: (0..node_bs - 10).map(|w| (0..nn).map(|n| r(n)[6 + w]).collect()).collect(),
+            }
+        });
+        Some(Gathered { state, nodal })
+    }
+
+    /// On a part: continue from `whole`, the whole model's state (a checkpoint's, which every
+    /// process reads): each process takes its nodes', elements' and bodies' values. Without a
+    /// part: [`Simulation::set_state`].
+    ///
+    /// # Errors
+    /// What does not fit (the sizes of the whole model's arrays, or [`Simulation::set_state`]'s).
+    pub fn set_whole_state(&mut self, whole: SimState) -> Result<(), String> {
+        let Some(p) = &self.sys.part else { return self.set_state(whole) };
+        let w = self.model.whole_facts();
+        let check = |what: &str, got: usize, want: usize| if got == want { Ok(()) } else { Err(format!("{what}: {got} in the checkpoint, {want} in the model")) };
+        check("displacement dofs", whole.sol.u.len(), 2 * w.n_nodes)?;
+        check("previous displacement dofs", whole.u_prev.len(), 2 * w.n_nodes)?;
+        check("element multipliers", whole.sol.lambda.len(), w.n_elements)?;
+        check("body areas", whole.scalars.run.area0_body.len(), w.n_bodies)?;
+        if whole.dynamics.is_some() {
+            return Err("the checkpoint is of a dynamic analysis, which a distributed part does not take yet".into());
+        }
+        let nodes = &p.whole.node;
+        let elements = &p.whole.element;
+        let pick = |v: &[f64]| -> Vec<f64> { nodes.iter().flat_map(|&n| [v[2 * n], v[2 * n + 1]]).collect() };
+        let SimState { mut scalars, sol, u_prev, dynamics } = whole;
+        let f = &sol.fields;
+        let fields = ElementFields {
+            states: elements.iter().map(|&e| f.states[e]).collect(),
+            sig: elements.iter().map(|&e| f.sig[e]).collect(),
+            pressure: elements.iter().map(|&e| f.pressure[e]).collect(),
+            theta: elements.iter().map(|&e| f.theta[e]).collect(),
+            alpha: elements.iter().map(|&e| f.alpha[e]).collect(),
+        };
+        let local = Solution { time: sol.time, u: pick(&sol.u), fields, lambda: elements.iter().map(|&e| sol.lambda[e]).collect(), j0: elements.iter().map(|&e| sol.j0[e]).collect() };
+        let area0: Vec<f64> = p.bodies.iter().map(|&b| scalars.run.area0_body[b]).collect();
+        let baseline = p.bodies.iter().map(|&b| scalars.run.remesh_baseline.get(b).cloned().flatten()).collect();
+        scalars.run.area0_body = area0;
+        scalars.run.remesh_baseline = baseline;
+        let u_prev = pick(&u_prev);
+        self.set_state(SimState { scalars, sol: local, u_prev, dynamics })
+    }
+}
