@@ -520,7 +520,11 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let mut whole = None;
     if _petsc.is_some() && comm.size() > 1 {
         if let Ok(m) = Model::from_case(&c) {
-            match Simulation::part_refusal(&m, &c.time) {
+            let refusal = match m.bodies.len() < comm.size() {
+                true => Some("fewer bodies than processes"),
+                false => Simulation::part_refusal(&m, &c.time),
+            };
+            match refusal {
                 None => whole = Some(m),
                 Some(what) if root => reporter.note(Note::Info, &format!("every MPI rank holds the whole model: a distributed part does not take {what} yet")),
                 Some(_) => {}

@@ -145,6 +145,10 @@ impl RankPart {
         if owner.len() != whole.bodies.len() || owner.iter().any(|&o| o >= size) {
             return Err(PartError::Owners(format!("{} owners for {} bodies on {size} processes (expected one process below {size} per body)", owner.len(), whole.bodies.len())));
         }
+        // (a process without a body would take other paths through a step than the others)
+        if let Some(idle) = (0..size).find(|&r| !owner.contains(&r)) {
+            return Err(PartError::Owners(format!("process {idle} owns none of the {} bodies (every process of a distributed run needs one)", whole.bodies.len())));
+        }
         let ghosts = ghost_bodies(&crate::distribute::particles_at(whole, x), owner, rank, reach)?;
         let owned: Vec<usize> = (0..owner.len()).filter(|&b| owner[b] == rank).collect();
         let body_nodes: Vec<usize> = whole.bodies.iter().map(|b| b.mesh.n_nodes()).collect();

@@ -190,7 +190,9 @@ impl Simulation {
     /// What of `model` and `time` a distributed part ([`Simulation::new_part`]) does not take
     /// yet, None when it takes them all.
     pub fn part_refusal(model: &Model, time: &TimeSpec) -> Option<&'static str> {
-        if model.contact.method != crate::contact::ContactMethod::Barrier {
+        if !model.has_contact() {
+            Some("a model without contact (one body, no walls)")
+        } else if model.contact.method != crate::contact::ContactMethod::Barrier {
             Some("a contact method other than the barrier")
         } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
             Some("cohering particles (the barrier's ties)")

@@ -87,9 +87,13 @@ impl Simulation {
             final_time: self.sol.time,
             wall_time_s: start.elapsed().as_secs_f64(),
             linear_solver: self.sys.linear_name.clone(),
-            n_dofs: self.model.n_dofs(),
-            n_free: self.sys.assembler.n_free,
-            n_elements: self.model.elements.len(),
+            // (a part: the whole model's counts)
+            n_dofs: 2 * self.model.whole_facts().n_nodes,
+            n_free: match &self.sys.part {
+                Some(p) => self.sys.sum(p.own_eqs as f64) as usize,
+                None => self.sys.assembler.n_free,
+            },
+            n_elements: self.model.whole_facts().n_elements,
             last: self.run.last_report.clone(),
             stop_reason,
             interrupted,
