@@ -20,6 +20,7 @@ use crate::case::Case;
 use crate::checkpoint::Checkpoint;
 use crate::fits::CurvePoint;
 use crate::model::Model;
+use crate::parallel::part::RankPart;
 use crate::output::{write_summary, FinalState, HistoryWriter, Phases, ProbeWriter, SummaryFile};
 use crate::comm::Collective;
 use crate::plot::{PlotReport, PlotRequest};
@@ -559,7 +560,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     // (on parts, rank 0 keeps the whole model for the output: the state is gathered onto it
     // at the output steps)
     let (mut sim, resumed, whole) = match checkpoint {
-        None if parts => match part_simulation(&model, &c, &comm, None) {
+        None if parts => match part_simulation(&model, &c, &comm, None, RankPart::reach(&model)) {
             Ok(sim) => (sim, None, Some(model)),
             Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
         },
@@ -575,7 +576,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 _ => PathBuf::from("."),
             };
             let restored = if parts {
-                ck.model(model).map_err(|e| e.to_string()).and_then(|whole| part_simulation(&whole, &c, &comm, Some(ck.state)).map(|sim| (sim, Some(whole))))
+                ck.model(model).map_err(|e| e.to_string()).and_then(|whole| part_simulation(&whole, &c, &comm, Some(ck.state), RankPart::reach(&whole)).map(|sim| (sim, Some(whole))))
             } else {
                 ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)).map(|sim| (sim, None)).map_err(|e| e.to_string())
             };
@@ -670,7 +671,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     // rank 0's flag there; without one, a flag nobody sets, so that all ranks check alike)
     let stop_flag = opts.stop.clone().unwrap_or_default();
     sim.set_interrupt(Arc::clone(&stop_flag));
-    let mut result = sim.run_controlled(&mut |s, r| {
+    let run_started = Instant::now();
+    let mut observer = |s: &Simulation, r: &StepReport| {
         last_report = Some(r.clone());
         max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
         if let Some(c) = &r.compaction {
@@ -751,9 +753,17 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             return ControlFlow::Break(format!("interrupted by {}", signal_name(signal)));
         }
         ControlFlow::Continue(())
-    });
+    };
+    // (on parts: made again, and the run goes on, where the particles moved out of their ghosts)
+    let mut remade = None;
+    let mut result = loop {
+        let mut segment = sim.run_controlled(&mut observer);
+        if !go_on_with_new_parts(&mut sim, &mut segment, whole.as_ref(), &c, &comm, &stop_flag, &mut remade) {
+            break segment;
+        }
+    };
     if let Ok(s) = result.as_mut() {
-        s.wall_time_s += wall_before;
+        s.wall_time_s = wall_before + run_started.elapsed().as_secs_f64();
         if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED {
             // the signal came during a step, which was abandoned: the checkpoint of the last
             // converged state, which the observer did not see with the signal
@@ -942,13 +952,13 @@ fn part_output_due(step: usize, every: usize, probes: bool, signal: usize, check
 /// This process's part of `whole` as a simulation of case `c` ([`Simulation::new_part`]): from
 /// the start, or at the whole model's `state` (a checkpoint's, read on every process), with the
 /// ghosts where the particles are in it. Collective.
-fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: Option<SimState>) -> Result<Simulation, String> {
+fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: Option<SimState>, reach: f64) -> Result<Simulation, String> {
     let x: Vec<[f64; 2]> = match &state {
         Some(s) if s.sol.u.len() != whole.n_dofs() => return Err(format!("the checkpoint has {} displacement dofs, the model {}", s.sol.u.len(), whole.n_dofs())),
         Some(s) => whole.x0.iter().enumerate().map(|(n, p)| [p[0] + s.sol.u[2 * n], p[1] + s.sol.u[2 * n + 1]]).collect(),
         None => whole.x0.clone(),
     };
-    let part = crate::parallel::part::RankPart::for_run(whole, &x, Arc::clone(comm)).map_err(|e| e.to_string())?;
+    let part = crate::parallel::part::RankPart::for_run(whole, &x, reach, Arc::clone(comm)).map_err(|e| e.to_string())?;
     let mut sim = Simulation::new_part(part, c.time.clone(), c.solver.clone()).map_err(|e| e.to_string())?;
     if let Some(s) = state {
         sim.set_whole_state(s)?;
@@ -959,14 +969,20 @@ fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: O
 /// Ranks 1..N of a run on parts ([`run`] on rank 0): the same part of the same model, the same
 /// collective steps of the output after every step (the flags of rank 0, the gathers), no
 /// output of their own. Returns what the run did; rank 0 says why a setup failed.
-fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
     let (every, probes) = (c.output.every, !whole.probes.is_empty());
     let sim = match checkpoint {
         None if !whole.outside_walls().is_empty() => return Ok(RunOutcome::BadInput("a particle outside the walls".into())),
-        None => part_simulation(&whole, c, &comm, None),
+        None => part_simulation(&whole, c, &comm, None, RankPart::reach(&whole)),
         Some(ck) => match ck.run_state::<RunState>() {
             Err(e) => Err(e.to_string()),
-            Ok(_) => ck.model(whole).map_err(|e| e.to_string()).and_then(|whole| part_simulation(&whole, c, &comm, Some(ck.state))),
+            Ok(_) => match ck.model(whole) {
+                Ok(w) => {
+                    whole = w;
+                    part_simulation(&whole, c, &comm, Some(ck.state), RankPart::reach(&whole))
+                }
+                Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
+            },
         },
     };
     let mut sim = match sim {
@@ -975,7 +991,7 @@ fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: 
     };
     // (rank 0's flag decides, also within a step: this one is never set)
     sim.set_interrupt(Arc::default());
-    let result = sim.run_controlled(&mut |s, r| {
+    let mut observer = |s: &Simulation, r: &StepReport| {
         let (signal, due) = step_flags(&*comm, 0, false);
         if part_output_due(r.step, every, probes, signal, due) {
             s.gather();
@@ -985,7 +1001,15 @@ fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: 
         } else {
             ControlFlow::Continue(())
         }
-    });
+    };
+    let never = Arc::default();
+    let mut remade = None;
+    let result = loop {
+        let mut segment = sim.run_controlled(&mut observer);
+        if !go_on_with_new_parts(&mut sim, &mut segment, Some(&whole), c, &comm, &never, &mut remade) {
+            break segment;
+        }
+    };
     // the gathers of rank 0's last checkpoint and output step, in its order
     if matches!(&result, Ok(s) if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED) {
         sim.gather();
@@ -998,4 +1022,40 @@ fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: 
         Ok(s) => RunOutcome::Completed(s),
         Err(e) => RunOutcome::Failed(e),
     })
+}
+
+/// After a run's segment on parts (`whole`: the model they are made from): when it stopped
+/// because a part's ghosts no longer hold every body within the contact reach of its own (the
+/// particles moved), make the parts again at the last converged state — every process gets the
+/// whole state, takes its share with the ghosts where the particles are now — and say to go
+/// on (true). False for any other end, and when the parts cannot be made again (`result` then
+/// says why). Collective on parts.
+///
+/// `remade` is the step at which the parts were last made again and the ghosts' reach then:
+/// made again at the same step (an iterate moved the particles farther than the reach), the
+/// reach doubles; at a later step it is [`RankPart::reach`] again.
+fn go_on_with_new_parts(sim: &mut Simulation, result: &mut Result<RunSummary, SolveError>, whole: Option<&Model>, c: &Case, comm: &Arc<dyn Collective>, stop: &Arc<AtomicUsize>, remade: &mut Option<(usize, f64)>) -> bool {
+    use crate::solver::NewtonFailure;
+    let (Some(whole), Err(SolveError::StepFailed { time, dt, dt_min, cause: NewtonFailure::Ghosts(why) })) = (whole, &*result) else { return false };
+    let (time, dt, dt_min) = (*time, *dt, *dt_min);
+    let step = sim.step();
+    let reach = match *remade {
+        Some((at, reach)) if at == step => 2.0 * reach,
+        _ => RankPart::reach(whole),
+    };
+    *remade = Some((step, reach));
+    tracing::info!(time, step, reach, %why, "the parts are made again: the particles moved out of their ghost layers");
+    let mut state = sim.gather_all().state;
+    state.scalars.partition.repartitions += 1;
+    match part_simulation(whole, c, comm, Some(state), reach) {
+        Ok(mut s) => {
+            s.set_interrupt(Arc::clone(stop));
+            *sim = s;
+            true
+        }
+        Err(e) => {
+            *result = Err(SolveError::StepFailed { time, dt, dt_min, cause: NewtonFailure::Part(format!("the parts could not be made again ({why}): {e}")) });
+            false
+        }
+    }
 }

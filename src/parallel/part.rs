@@ -110,15 +110,16 @@ pub struct RankPart {
 impl RankPart {
     /// This process's part of `whole` for a run: the bodies partitioned over the processes
     /// by METIS ([`crate::distribute::partition_particles`], rank 0's partition broadcast),
-    /// the ghosts within [`RankPart::reach`] of its bodies at coordinates `x`. Collective.
+    /// the ghosts within `reach` of its bodies at coordinates `x` ([`RankPart::reach`] as a
+    /// rule). Collective.
     ///
     /// # Errors
     /// As [`RankPart::new`].
-    pub fn for_run(whole: &Model, x: &[[f64; 2]], comm: Arc<dyn Collective>) -> Result<Self, PartError> {
+    pub fn for_run(whole: &Model, x: &[[f64; 2]], reach: f64, comm: Arc<dyn Collective>) -> Result<Self, PartError> {
         let mut owner: Vec<f64> = crate::distribute::partition_particles(whole, comm.size()).iter().map(|&o| o as f64).collect();
         comm.broadcast(&mut owner);
         let owner: Vec<usize> = owner.iter().map(|&o| o as usize).collect();
-        Self::new(whole, x, &owner, Self::reach(whole), comm)
+        Self::new(whole, x, &owner, reach, comm)
     }
 
     /// How far from its bodies a part takes other processes' bodies as ghosts: a quarter of
@@ -213,7 +214,7 @@ impl RankPart {
     /// other processes. Collective.
     pub fn gather_nodes(&self, local: &[f64], bs: usize) -> Option<Vec<f64>> {
         let own = self.nodes.n_owned();
-        gather_records(self.nodes.comm(), (0..own).map(|i| (self.whole.node[i], &local[i * bs..(i + 1) * bs])), bs, self.nodes.n_global())
+        gather_records(self.nodes.comm(), (0..own).map(|i| (self.whole.node[i], &local[i * bs..(i + 1) * bs])), bs, self.nodes.n_global(), false)
     }
 
     /// [`RankPart::gather_nodes`] for element values (`bs` per element of the part; its own
@@ -221,7 +222,7 @@ impl RankPart {
     pub fn gather_elements(&self, local: &[f64], bs: usize) -> Option<Vec<f64>> {
         let own: Vec<usize> = (0..self.model.elements.len()).filter(|&e| self.model.elem_body[e] < self.n_owned_bodies).collect();
         let total = self.nodes.comm().all_gather_varcount(&[own.len() as f64]).iter().sum::<f64>() as usize;
-        gather_records(self.nodes.comm(), own.iter().map(|&e| (self.whole.element[e], &local[e * bs..(e + 1) * bs])), bs, total)
+        gather_records(self.nodes.comm(), own.iter().map(|&e| (self.whole.element[e], &local[e * bs..(e + 1) * bs])), bs, total, false)
     }
 
     /// The part's vector (`bs` values per node, its ghosts' included) of rank 0's whole-model
@@ -260,14 +261,15 @@ impl RankPart {
 
 /// Rank 0's vector of `n` records of `bs` values, each process sending `(index, values)`
 /// records (every index once over the processes); None on the others.
-pub fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize) -> Option<Vec<f64>> {
+/// With `everywhere`, every process gets the vector (an all-gather).
+pub fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize, everywhere: bool) -> Option<Vec<f64>> {
     let mut buf = Vec::new();
     for (i, v) in records {
         buf.push(i as f64);
         buf.extend_from_slice(v);
     }
-    let all = comm.gather_varcount_to_root(&buf);
-    if !comm.is_root() {
+    let all = if everywhere { comm.all_gather_varcount(&buf) } else { comm.gather_varcount_to_root(&buf) };
+    if !everywhere && !comm.is_root() {
         return None;
     }
     let mut out = vec![f64::NAN; n * bs];

@@ -254,7 +254,7 @@ impl Simulation {
         b.tie_gap = f64::INFINITY;
         let near = b.contact.candidates(&x_n, reach);
         let pairs = b.with_ties(near);
-        self.check_ghosts(&x_n, reach)?;
+        self.check_ghosts(&x_n, None, reach)?;
         let Some(b) = self.barrier.as_mut() else { return Ok(()) };
         // the barrier at the converged state, with κ as the last commit left it: the friction
         // of this step is lagged there, and the springs' directions are chosen from it (the
@@ -295,12 +295,21 @@ impl Simulation {
     /// On a part: that its ghosts still hold every other process's body within `reach` of
     /// one of its own at `x` (the boxes of every process's bodies, gathered). The ghosts are
     /// chosen when the part is made; a body that comes within reach of one that is not its
-    /// ghost would miss pairs, so the run stops at once ([`NewtonFailure::Part`]) naming them
-    /// (rebuilding the part during a run is not done yet). Nothing to check without a part.
-    fn check_ghosts(&self, x: &[[f64; 2]], reach: f64) -> Result<(), NewtonFailure> {
+    /// ghost would miss pairs, so the step stops at once ([`NewtonFailure::Ghosts`]) naming
+    /// them, before anything of it is done: the caller makes the parts again there. Nothing to
+    /// check without a part.
+    /// With `x1`, the boxes hold each body at `x` and at `x1` (a path's start and end).
+    fn check_ghosts(&self, x: &[[f64; 2]], x1: Option<&[[f64; 2]]>, reach: f64) -> Result<(), NewtonFailure> {
         let Some(p) = &self.sys.part else { return Ok(()) };
         // (global body, box) of its own bodies, then every process's
-        let mine: Vec<f64> = crate::distribute::particles_at(&self.model, x).iter().zip(&p.bodies).take(p.own_bodies).flat_map(|(b, &g)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect();
+        let mut at = crate::distribute::particles_at(&self.model, x);
+        if let Some(x1) = x1 {
+            for (a, b) in at.iter_mut().zip(crate::distribute::particles_at(&self.model, x1)) {
+                a.min = [a.min[0].min(b.min[0]), a.min[1].min(b.min[1])];
+                a.max = [a.max[0].max(b.max[0]), a.max[1].max(b.max[1])];
+            }
+        }
+        let mine: Vec<f64> = at.iter().zip(&p.bodies).take(p.own_bodies).flat_map(|(b, &g)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect();
         let all = self.sys.comm.all_gather_varcount(&mine);
         let n = self.model.whole_facts().n_bodies;
         let mut boxes = vec![partition::Particle { elements: 0, min: [0.0; 2], max: [0.0; 2] }; n];
@@ -323,9 +332,9 @@ impl Simulation {
         // (every process stops alike, each naming what it found)
         let failed = self.sys.any(missing.is_some());
         match missing {
-            Some(Ok((a, c))) => Err(NewtonFailure::Part(format!("body {c} came within {reach:.3e} mm of body {a} of process {} but is not one of its ghosts (the part's ghosts are chosen when it is made; rebuilding them during a run is not done yet)", self.sys.comm.rank()))),
+            Some(Ok((a, c))) => Err(NewtonFailure::Ghosts(format!("body {c} came within {reach:.3e} mm of body {a} of process {} but is not one of its ghosts", self.sys.comm.rank()))),
             Some(Err(e)) => Err(NewtonFailure::Part(e)),
-            None if failed => Err(NewtonFailure::Part("a ghost layer no longer covers its contacts on another process".into())),
+            None if failed => Err(NewtonFailure::Ghosts("a ghost layer no longer covers its contacts on another process".into())),
             None => Ok(()),
         }
     }
@@ -494,7 +503,7 @@ impl Simulation {
     /// The largest fraction of the Newton update `du` (every dof) from `u` that keeps every
     /// node off every edge of another particle and in front of the walls, which move with it
     /// to their end-of-step positions (CCD with IPC's conservative rescaling).
-    pub(super) fn barrier_step_limit(&mut self, u: &[f64], du: &[f64]) -> f64 {
+    pub(super) fn barrier_step_limit(&mut self, u: &[f64], du: &[f64]) -> Result<f64, NewtonFailure> {
         let moved: Vec<f64> = u.iter().zip(du).map(|(a, b)| a + b).collect();
         let alpha = self.barrier.as_ref().map_or(1.0, |b| b.alpha);
         self.collision_free_fraction(u, &moved, alpha, 1.0)
@@ -503,12 +512,19 @@ impl Simulation {
     /// The largest fraction of the straight path from `u0` to `u1` (every dof), the walls
     /// moving from progress `alpha0` to `alpha1` through the step, that meets no contact (CCD
     /// with IPC's conservative rescaling; 1 when nothing meets along the whole path).
-    pub(super) fn collision_free_fraction(&mut self, u0: &[f64], u1: &[f64], alpha0: f64, alpha1: f64) -> f64 {
+    ///
+    /// On a part, the path may also bring one of its bodies within d̂ of another process's
+    /// body that is not its ghost, which its CCD cannot see: then [`NewtonFailure::Ghosts`]
+    /// (the step is made again on new parts).
+    pub(super) fn collision_free_fraction(&mut self, u0: &[f64], u1: &[f64], alpha0: f64, alpha1: f64) -> Result<f64, NewtonFailure> {
         let _t = self.clock.scope(Phase::ContactSearch);
         let x0 = self.coords(u0);
         let x1 = self.coords(u1);
-        let Some(b) = self.barrier.as_ref() else { return 1.0 };
-        self.sys.min(b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1)))
+        let Some(b) = self.barrier.as_ref() else { return Ok(1.0) };
+        let dhat = b.contact.dhat;
+        let fraction = b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1));
+        self.check_ghosts(&x0, Some(&x1), dhat)?;
+        Ok(self.sys.min(fraction))
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged

@@ -98,6 +98,11 @@ pub enum NewtonFailure {
     /// contacts): no shorter step helps, the run stops (on every process alike).
     #[error("distributed part: {0}")]
     Part(String),
+    /// A distributed part's ghosts no longer hold every other process's body within the
+    /// contact reach of its own (the particles moved): the caller makes the parts again at
+    /// the last converged state ([`Simulation::gather_all`]) and goes on.
+    #[error("distributed part: {0}")]
+    Ghosts(String),
 }
 
 /// The stop reason [`Simulation::run_controlled`] gives when a stop asked for during a step

@@ -359,12 +359,12 @@ impl Simulation {
                 Some(b) => {
                     let alpha0 = b.alpha;
                     let limit = if !turning {
-                        self.barrier_step_limit(&u0, &du_full)
+                        self.barrier_step_limit(&u0, &du_full)?
                     } else {
                         let mut u1 = u0.clone();
                         turned_point(&self.model.x0, &u0, &du_full, &turns, 1.0, &mut u1, &mut tangent);
                         let chord: Vec<f64> = u1.iter().zip(&u0).map(|(a, b)| a - b).collect();
-                        self.barrier_step_limit(&u0, &chord)
+                        self.barrier_step_limit(&u0, &chord)?
                     };
                     (limit, alpha0, 12)
                 }
@@ -404,7 +404,7 @@ impl Simulation {
                     }
                 } else {
                     turned_point(&self.model.x0, &u0, &du_full, &turns, eta, u, &mut tangent);
-                    crossed = self.collision_free_fraction(&u0, u, alpha0, wall_progress(alpha0, eta)) < 1.0;
+                    crossed = self.collision_free_fraction(&u0, u, alpha0, wall_progress(alpha0, eta))? < 1.0;
                     if crossed {
                         tracing::debug!(eta, turns = turns.len(), "the turned point's chord meets a contact: backed off");
                         eta *= 0.5;

@@ -30,7 +30,7 @@
 //! iterates, and a departure that fails could not give them back), nor where the solver
 //! cannot tell a definite tangent (LU, iterative solvers).
 
-use super::{Simulation, Trial};
+use super::{NewtonFailure, Simulation, Trial};
 use crate::assembly::FIXED;
 use crate::material::TimeIncrement;
 
@@ -52,12 +52,16 @@ pub const AMPLITUDE: f64 = 1e-2;
 impl Simulation {
     /// See the module docs. Returns the trial the step ends on (the given one when it is a
     /// minimum or no departure converged).
-    pub(super) fn leave_saddle(&mut self, mut trial: Trial, inc: TimeIncrement) -> Trial {
+    ///
+    /// # Errors
+    /// [`NewtonFailure::Ghosts`] when a departure meets a body a part does not hold (the step
+    /// is made again on new parts).
+    pub(super) fn leave_saddle(&mut self, mut trial: Trial, inc: TimeIncrement) -> Result<Trial, NewtonFailure> {
         let n_free = self.sys.assembler.n_free;
         // (with friction or ties the departure's solve would update their lagged terms, which
         // a departure that fails could not give back: there the step keeps its state)
         if n_free == 0 || self.barrier.as_ref().is_none_or(|b| b.definite || b.has_friction() || b.tie_stiffness > 0.0) {
-            return trial;
+            return Ok(trial);
         }
         let mut moved = false;
         for departure in 0..MAX_DEPARTURES {
@@ -83,7 +87,7 @@ impl Simulation {
             }
             let s = AMPLITUDE * h / big;
             dir.iter_mut().for_each(|v| *v *= s);
-            let eta = self.barrier_step_limit(&trial.u, &dir).min(1.0);
+            let eta = self.barrier_step_limit(&trial.u, &dir)?.min(1.0);
             let start: Vec<f64> = trial.u.iter().zip(&dir).map(|(a, b)| a + eta * b).collect();
             if let Some(b) = self.barrier.as_mut() {
                 b.descent = true;
@@ -101,6 +105,7 @@ impl Simulation {
                         break;
                     }
                 }
+                Err(e @ NewtonFailure::Ghosts(_)) => return Err(e),
                 Err(e) => {
                     tracing::debug!(time = inc.time, departure, %e, "the departure from a saddle did not converge; the step keeps its converged state");
                     break;
@@ -113,7 +118,7 @@ impl Simulation {
         if self.evaluate(&trial.u, inc, &vol, false).is_err() {
             tracing::warn!(moved, "the converged state of a step could not be evaluated again");
         }
-        trial
+        Ok(trial)
     }
 
     /// A direction of negative curvature of the tangent in `kk` (not definite): the tangent

@@ -130,6 +130,16 @@ impl Simulation {
     /// which every process holds alike, rank 0's), None on the other processes. Without a
     /// part: the state itself. Collective on a part.
     pub fn gather(&self) -> Option<Gathered> {
+        self.gather_to(false)
+    }
+
+    /// [`Simulation::gather`] onto every process (each with its own counters and timings): to
+    /// make the parts again from. Collective on a part.
+    pub fn gather_all(&self) -> Gathered {
+        self.gather_to(true).expect("an all-gather gives every process the state")
+    }
+
+    fn gather_to(&self, everywhere: bool) -> Option<Gathered> {
         let Some(p) = &self.sys.part else {
             return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned() });
         };
@@ -154,14 +164,14 @@ impl Simulation {
                 }
             }
         }
-        let nodes = crate::parallel::part::gather_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, whole.n_nodes);
+        let nodes = crate::parallel::part::gather_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, whole.n_nodes, everywhere);
         let own_elements: Vec<usize> = (0..self.model.elements.len()).filter(|&e| self.model.elem_body[e] < p.own_bodies).collect();
         let mut local = Vec::with_capacity(own_elements.len() * ELEMENT_RECORD);
         for &e in &own_elements {
             element_record(&self.sol, e, &mut local);
         }
-        let elements = crate::parallel::part::gather_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * ELEMENT_RECORD..(i + 1) * ELEMENT_RECORD])), ELEMENT_RECORD, whole.n_elements);
-        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies);
+        let elements = crate::parallel::part::gather_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * ELEMENT_RECORD..(i + 1) * ELEMENT_RECORD])), ELEMENT_RECORD, whole.n_elements, everywhere);
+        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, everywhere);
         let (Some(nodes), Some(elements), Some(areas)) = (nodes, elements, areas) else { return None };
         let nn = whole.n_nodes;
         let mut state = self.state();

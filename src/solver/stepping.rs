@@ -177,7 +177,7 @@ impl Simulation {
         // whether the step starts descending on the potential (after a step that needed it)
         let sticky = self.barrier.as_ref().is_some_and(|b| b.descent);
         // (what an abandoned step puts back: the springs' retry switches, the cut-back count)
-        let (springs0, cutbacks0) = ((self.springs.all, self.springs.viscous), self.run.total_cutbacks);
+        let (springs0, cutbacks0, departures0) = ((self.springs.all, self.springs.viscous), self.run.total_cutbacks, self.run.saddle_departures);
         loop {
             if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot.as_ref()) {
                 c.restore(snap.clone());
@@ -205,14 +205,12 @@ impl Simulation {
                     }
                 }
             }
-            if let Err(cause @ NewtonFailure::Part(_)) = result {
-                // (no retry or cut-back changes a part's ghosts: the run stops at once)
-                return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause });
-            }
             let descent_retry = self.barrier.as_ref().is_some_and(|b| !b.descent) && !matches!(result, Err(NewtonFailure::Element(_)));
-            if let Err(NewtonFailure::Interrupted) = result {
+            if let Err(cause @ (NewtonFailure::Interrupted | NewtonFailure::Part(_) | NewtonFailure::Ghosts(_))) = result {
                 // abandoned: the last converged state as the step found it (the contact
-                // histories, the descent's switch), to be checkpointed
+                // histories, the descent's switch, the springs, the counts), to be
+                // checkpointed (a stop) or taken onto new parts (a part's ghosts no longer
+                // cover its contacts: no retry or cut-back changes them)
                 if let (Some(c), Some(snap)) = (self.contact.as_mut(), snapshot) {
                     c.restore(snap);
                 }
@@ -221,8 +219,11 @@ impl Simulation {
                 }
                 (self.springs.all, self.springs.viscous) = springs0;
                 self.run.total_cutbacks = cutbacks0;
-                tracing::info!(time = self.sol.time, dt = dt_try, "step abandoned: a stop was asked for");
-                return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause: NewtonFailure::Interrupted });
+                self.run.saddle_departures = departures0;
+                if matches!(cause, NewtonFailure::Interrupted) {
+                    tracing::info!(time = self.sol.time, dt = dt_try, "step abandoned: a stop was asked for");
+                }
+                return Err(SolveError::StepFailed { time: self.sol.time, dt: dt_try, dt_min: self.time.dt_min, cause });
             }
             match result {
                 Ok(trial) => {
@@ -369,7 +370,7 @@ impl Simulation {
         }
         let restart = self.run.dt_prev > 0.0;
         let trial = self.solve_from(u, inc, restart)?;
-        Ok(self.leave_saddle(trial, inc))
+        self.leave_saddle(trial, inc)
     }
 
     /// Commit a converged step: states, displacements, multipliers, time; build its report.
