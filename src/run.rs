@@ -685,6 +685,25 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 curve.push(CurvePoint { solid_ratio: c.solid_ratio, pressure: loaded.iter().sum::<f64>() / loaded.len() as f64 });
             }
         }
+        let t_out = Instant::now();
+        if let Err(e) = history.write(r) {
+            io_error.get_or_insert(e);
+        }
+        history_s += t_out.elapsed().as_secs_f64();
+        let phi = r.compaction.as_ref().map(|c| c.solid_ratio);
+        if phi0.is_none() {
+            // the first step's solid ratio stands in for the initial one (the first
+            // increment is small)
+            phi0 = phi;
+        }
+        let solid = match (phi0, phi, target) {
+            (Some(a), Some(b), Some(t)) => Some((a, b, t)),
+            _ => None,
+        };
+        if !opts.quiet {
+            let done = progress(r.time, t_end, solid);
+            reporter.step(&Progress { report: r, done, solid_ratio: phi, target, elapsed_s: started.elapsed().as_secs_f64() });
+        }
         // every rank stops after the same step, and checkpoints it together: rank 0's flags
         // decide (see `run_rank`, `run_part_rank`)
         let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
@@ -697,9 +716,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             _ => Some(s.snapshot()),
         };
         let t_out = Instant::now();
-        if let Err(e) = history.write(r) {
-            io_error.get_or_insert(e);
-        }
         if let (Some(p), Some(snap)) = (probes.as_mut(), &snap) {
             if let Err(e) = p.write(snap, r) {
                 io_error.get_or_insert(e);
@@ -714,20 +730,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             if let Err(e) = written {
                 results_error = Some(e);
             }
-        }
-        let phi = r.compaction.as_ref().map(|c| c.solid_ratio);
-        if phi0.is_none() {
-            // the first step's solid ratio stands in for the initial one (the first
-            // increment is small)
-            phi0 = phi;
-        }
-        let solid = match (phi0, phi, target) {
-            (Some(a), Some(b), Some(t)) => Some((a, b, t)),
-            _ => None,
-        };
-        if !opts.quiet {
-            let done = progress(r.time, t_end, solid);
-            reporter.step(&Progress { report: r, done, solid_ratio: phi, target, elapsed_s: started.elapsed().as_secs_f64() });
         }
         if signal != 0 || due {
             let t0 = Instant::now();
