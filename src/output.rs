@@ -412,6 +412,10 @@ pub struct SummaryFile<'a> {
     pub n_nodes: usize,
     pub n_elements: usize,
     pub wall_time_s: f64,
+    /// The peak resident memory of each process of the run, rank 0 first (MB: `VmHWM`; absent
+    /// where the system does not tell).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub peak_memory_mb: Vec<f64>,
     /// The last converged step (also of a failed run).
     #[serde(rename = "final")]
     pub final_state: Option<FinalState>,

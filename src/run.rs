@@ -812,6 +812,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     };
     let last_step = summary.and_then(|s| s.last.as_ref());
     let wall_time_s = wall_before + started.elapsed().as_secs_f64();
+    let peak_memory_mb = peak_memory(&*comm);
     let output_s = history_s + ckpt_s + results.as_ref().map_or(0.0, |w| w.elapsed_s);
     let file = SummaryFile {
         mpfem_version: env!("CARGO_PKG_VERSION"),
@@ -827,6 +828,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         n_nodes: whole.as_ref().unwrap_or(&sim.model).n_nodes(),
         n_elements: whole.as_ref().unwrap_or(&sim.model).elements.len(),
         wall_time_s,
+        peak_memory_mb,
         final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
         phases: Phases::split(&sim.timing(), output_s, wall_time_s),
         fits: sim.initial_solid_ratio().filter(|_| !curve.is_empty()).map(|d0| {
@@ -927,11 +929,27 @@ fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>)
         (0, _) => ControlFlow::Continue(()),
         _ => ControlFlow::Break("interrupted on rank 0".into()),
     });
+    peak_memory(&*comm);
     Ok(match result {
         Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
         Ok(s) => RunOutcome::Completed(s),
         Err(e) => RunOutcome::Failed(e),
     })
+}
+
+/// Every process's peak resident memory (MB, `VmHWM` of `/proc/self/status`), on rank 0 in
+/// rank order (empty elsewhere, and where the system does not tell). Collective.
+fn peak_memory(comm: &dyn Collective) -> Vec<f64> {
+    let own = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)).and_then(|v| v.parse::<f64>().ok()))
+        .map_or(f64::NAN, |kb| kb / 1024.0);
+    let all = comm.gather_varcount_to_root(&[own]);
+    if all.iter().all(|v| v.is_finite()) {
+        all
+    } else {
+        Vec::new()
+    }
 }
 
 /// After a converged step: rank 0's stop signal (0: none) and whether a checkpoint is due, the
@@ -1019,6 +1037,7 @@ fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoi
     if every > 0 {
         sim.gather();
     }
+    peak_memory(&*comm);
     Ok(match result {
         Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
         Ok(s) => RunOutcome::Completed(s),

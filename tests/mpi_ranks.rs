@@ -322,7 +322,8 @@ fn schwarz_pcg_on_2_to_4_ranks_matches_the_serial_runs() {
 
 /// The scaling study runs from its one command (`jobs/scaling/study.sh`, here its QUICK smoke
 /// size: 4 × 4 discs strong, 2 discs a rank weak, 1 and 2 ranks, every solver of the build) with this
-/// build's binary, and writes its table and both plots; every run completed.
+/// build's binary, and writes its table and both plots; every run completed and reports its
+/// peak memory.
 #[test]
 fn the_scaling_study_runs_from_one_command() {
     let out = tmpdir("scaling");
@@ -332,7 +333,7 @@ fn the_scaling_study_runs_from_one_command() {
         .env("MPFEM", env!("CARGO_BIN_EXE_mpfem"))
         .env("QUICK", "1")
         .env("RANKS", "1 2")
-        .env("SOLVERS", if cfg!(feature = "petsc") { "cholesky pcg-schwarz mumps" } else { "cholesky pcg-schwarz" })
+        .env("SOLVERS", if cfg!(feature = "petsc") { "cholesky pcg-schwarz mumps parts" } else { "cholesky pcg-schwarz" })
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_plm", "isolated")
@@ -341,13 +342,21 @@ fn the_scaling_study_runs_from_one_command() {
     assert!(o.status.success(), "study.sh: {:?}\nstdout: {}\nstderr: {}", o.status, String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(out.join("scaling.csv")).expect("scaling.csv");
     let rows: Vec<&str> = csv.lines().skip(1).collect();
-    // 2 studies × 2 (3 with PETSc) solvers × 2 rank counts
-    let solvers: &[&str] = if cfg!(feature = "petsc") { &["cholesky", "pcg-schwarz", "mumps"] } else { &["cholesky", "pcg-schwarz"] };
+    // 2 studies × 2 (4 with PETSc) solvers × 2 rank counts
+    let solvers: &[&str] = if cfg!(feature = "petsc") { &["cholesky", "pcg-schwarz", "mumps", "parts"] } else { &["cholesky", "pcg-schwarz"] };
     assert_eq!(rows.len(), 4 * solvers.len(), "scaling.csv:\n{csv}");
     for solver in solvers {
         assert!(rows.iter().any(|r| r.contains(solver)), "no {solver} rows:\n{csv}");
     }
     assert!(rows.iter().all(|r| r.contains("completed")), "a run did not complete:\n{csv}");
+    // every run's peak memory (summary.json's peak_memory_mb, the largest rank's): a positive
+    // number of MB
+    let header: Vec<&str> = csv.lines().next().unwrap_or_default().split(',').collect();
+    let peak = header.iter().position(|h| *h == "peak_mb").expect("a peak_mb column");
+    for r in &rows {
+        let mb: f64 = r.split(',').nth(peak).and_then(|v| v.parse().ok()).unwrap_or(f64::NAN);
+        assert!(mb > 1.0 && mb < 1e5, "peak_mb {mb} in {r}");
+    }
     for svg in ["speedup.svg", "efficiency.svg"] {
         let text = std::fs::read_to_string(out.join(svg)).unwrap_or_else(|e| panic!("{svg}: {e}"));
         assert!(text.starts_with("<svg") && text.contains("polyline"), "{svg} has no curves");

@@ -20,12 +20,13 @@ import os
 import sys
 from xml.sax.saxutils import escape
 
-COLOURS = {"cholesky": "#1f77b4", "pcg-schwarz": "#d62728", "mumps": "#2ca02c"}
-MARKERS = {"cholesky": "circle", "pcg-schwarz": "square", "mumps": "circle"}
+COLOURS = {"cholesky": "#1f77b4", "pcg-schwarz": "#d62728", "mumps": "#2ca02c", "parts": "#9467bd"}
+MARKERS = {"cholesky": "circle", "pcg-schwarz": "square", "mumps": "circle", "parts": "square"}
 LABELS = {
     "cholesky": "cholesky (gathered, rank 0 factors)",
     "pcg-schwarz": "pcg-schwarz (distributed)",
     "mumps": "mumps (PETSc, distributed LDLt)",
+    "parts": "parts (own + ghost particles, barrier, MUMPS)",
 }
 FONT = "DejaVu Sans, Helvetica, Arial, sans-serif"
 

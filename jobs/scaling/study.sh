@@ -17,9 +17,12 @@
 # (linear = "pcg", preconditioner = "schwarz", pcg_tol = 1e-8: every rank factorises the blocks
 # of its own particles; a system it fails on is solved directly on rank 0, counted in the
 # direct_fallbacks column) and "mumps" (linear = "petsc": PETSc with MUMPS's distributed LDLt,
-# every rank factorising its particles' rows; needs a build with --features petsc). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
+# every rank factorising its particles' rows; needs a build with --features petsc) and "parts"
+# (linear = "petsc" with the barrier contact instead of the penalty method: each rank holds
+# only its own particles and their neighbours, the owned + ghost parts of issue 21). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
 # N = 1; THREADS changes it); wall time and phases from the run's summary.json (mpirun's start-up not included);
-# assembly_s = element + contact assembly, linear_s = linear solves.
+# assembly_s = element + contact assembly, linear_s = linear solves, peak_mb = the largest peak
+# resident memory of the run's ranks (summary.json's peak_memory_mb).
 # Time: the default 3 rounds (48 runs) took 4 min 47 s on the shared 2-core development machine
 # (load average ~3; one round took 2.5 min at load ~7), see docs/scaling/README.md: the sizes
 # above are the ones the issue asks for, not cut back.
@@ -32,7 +35,9 @@
 #   REPEAT     rounds over all runs (default 3; 1 with QUICK=1); scaling.csv keeps the fastest
 #   MESH_SIZE  element size in mm (default 2.5; smaller makes every job larger)
 #   THREADS    threads a rank (default 1; 0 = the node's cores divided among its ranks)
-#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz mumps")
+#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz mumps parts")
+#   STRONG     the strong study's grid: STRONG x STRONG discs (default 16; 4 with QUICK=1; 32 is
+#              the 1,024-disc case)
 #   QUICK=1    tiny sizes (4 x 4 discs strong, 2 discs a rank weak, 2 steps), one round: a
 #              smoke run of about 20 s
 #   OMPI_MCA_mpi_yield_when_idle  default 1 here: ranks waiting in MPI give up the core (more
@@ -77,9 +82,9 @@ repeats=${REPEAT:-3}
 mesh_size=${MESH_SIZE:-2.5}
 # threads per rank (mpfem run --threads): 1 by default; 0 divides the node's cores among the ranks
 threads=${THREADS:-1}
-solvers=${SOLVERS:-cholesky pcg-schwarz mumps}
+solvers=${SOLVERS:-cholesky pcg-schwarz mumps parts}
 for s in $solvers; do
-  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || [ "$s" = mumps ] || die "SOLVERS must name cholesky, pcg-schwarz and/or mumps, got '$solvers'"
+  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || [ "$s" = mumps ] || [ "$s" = parts ] || die "SOLVERS must name cholesky, pcg-schwarz, mumps and/or parts, got '$solvers'"
 done
 [[ $threads =~ ^[0-9]+$ ]] || die "THREADS must be a non-negative integer, got '$threads'"
 
@@ -99,12 +104,13 @@ if [ "$quick" = 1 ]; then end=0.02; else end=0.04; fi
 
 # case file for an nx x ny disc grid and a solver (cholesky | pcg-schwarz)
 write_case() { # file nx ny solver
-  local L=$((10 * $2)) Ly=$((10 * $3)) v solver_table
+  local L=$((10 * $2)) Ly=$((10 * $3)) v solver_table contact=penalty
   v=$(awk -v l="$L" 'BEGIN { printf "%g", 0.4 * l }')
   case $4 in
     cholesky) solver_table='linear = "cholesky"' ;;
     pcg-schwarz) solver_table=$'linear = "pcg"\npreconditioner = "schwarz"\npcg_tol = 1e-8' ;;
     mumps) solver_table='linear = "petsc"' ;;
+    parts) solver_table='linear = "petsc"' contact=barrier ;;
     *) die "unknown solver $4" ;;
   esac
   cat >"$1" <<EOF
@@ -143,7 +149,7 @@ solid_ratio = 0.76
 mesh_size = $mesh_size
 
 [contact]
-method = "penalty"
+method = "$contact"
 
 [time]
 end = $end
@@ -169,7 +175,7 @@ grep -q "2 MPI ranks" "$tmp/probe.log" || {
   head -5 "$tmp/probe.log" >&2
   die "$exe is not an MPI build (2 ranks ran as 2 serial runs): build it with cargo build --release --features petsc, or set MPFEM"
 }
-if [[ " $solvers " == *" mumps "* ]]; then
+if [[ " $solvers " == *" mumps "* || " $solvers " == *" parts "* ]]; then
   write_case "$tmp/probe-mumps.toml" 2 2 mumps
   launch 2 "$tmp/probe-mumps.toml" "$tmp/probe-mumps" "$tmp/probe-mumps.log" || {
     tail -5 "$tmp/probe-mumps.log" >&2
@@ -179,7 +185,7 @@ fi
 
 csv=$outdir/scaling.csv
 runs_csv=$outdir/runs.csv
-header=study,solver,ranks,particles,elements,wall_s,assembly_s,linear_s,linear_solves,linear_iterations,status,direct_fallbacks
+header=study,solver,ranks,particles,elements,wall_s,assembly_s,linear_s,linear_solves,linear_iterations,status,direct_fallbacks,peak_mb
 echo "$header,repeat" >"$runs_csv"
 rm -f "$csv"
 
@@ -228,13 +234,13 @@ path, study, solver, ranks, particles, rc, fb, rep = sys.argv[1:]
 try:
     s = json.load(open(path))
 except (OSError, ValueError):
-    print(f"{study},{solver},{ranks},{particles},,,,,,,no-summary(exit {rc}),{fb},{rep}")
+    print(f"{study},{solver},{ranks},{particles},,,,,,,no-summary(exit {rc}),{fb},,{rep}")
     sys.exit(0)
 t = s["run"]["timing"]
 status = s["status"] if rc == "0" else f"{s['status']}(exit {rc})"
 print(f"{study},{solver},{ranks},{particles},{s['n_elements']},{s['wall_time_s']:.4f},"
       f"{t['element_assembly'] + t['contact_assembly']:.4f},{t['linear_solve']:.4f},"
-      f"{t['linear_solves']},{t['linear_iterations']},{status},{fb},{rep}")
+      f"{t['linear_solves']},{t['linear_iterations']},{status},{fb},{max(s.get('peak_memory_mb') or [float('nan')]):.0f},{rep}")
 PY
   )
   echo "$row" >>"$runs_csv"
@@ -249,7 +255,9 @@ PY
   echo "$(cut -d, -f6 <<<"$row") s$([ "$fb" -gt 0 ] && echo " ($fb systems solved directly after the Schwarz solver failed)")" >&2
 }
 
-if [ "$quick" = 1 ]; then snx=4 sny=4; else snx=16 sny=16; fi
+if [ "$quick" = 1 ]; then snx=${STRONG:-4}; else snx=${STRONG:-16}; fi
+[[ $snx =~ ^[1-9][0-9]*$ ]] || die "STRONG must be a positive integer, got '$snx'"
+sny=$snx
 weak_grid() { # ranks -> "nx ny"
   if [ "$quick" = 1 ]; then echo "$((2 * $1)) 1"; return; fi
   local k
