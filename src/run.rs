@@ -709,7 +709,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
         let (signal, due) = step_flags(&*comm, opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst)), due);
         // a part's state gathered onto the whole model, when something is written from it
-        let gathered = if parts && part_output_due(r.step, every, has_probes, signal, due) { s.gather() } else { None };
+        let gathered = if parts && part_output_due(r.step, every, has_probes, signal, due) { s.gather(signal != 0 || due) } else { None };
         let snap = match (&gathered, &whole) {
             (Some(g), Some(w)) => Some(g.snapshot(w)),
             _ if parts => None,
@@ -742,6 +742,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 restarts: restarts.clone(),
             };
             ckpt_failed = !match (&gathered, &whole) {
+                // (gathered complete: a checkpoint was due)
                 (Some(g), Some(w)) => checkpoint_now(out, w, &g.state, &sha, &state, (r.step, r.time), reporter),
                 _ => checkpoint_now(out, &s.model, &s.state(), &sha, &state, (r.step, r.time), reporter),
             };
@@ -773,7 +774,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             s.stop_reason = format!("interrupted by {} (the step under way abandoned)", signal_name(signal));
             let t0 = Instant::now();
             let state = RunState { phi0, max_body_volume_error, curve: curve.clone(), wall_time_s: wall_before + started.elapsed().as_secs_f64(), history_s, restarts: restarts.clone() };
-            ckpt_failed = !match (parts.then(|| sim.gather()).flatten(), &whole) {
+            ckpt_failed = !match (parts.then(|| sim.gather(true)).flatten(), &whole) {
                 (Some(g), Some(w)) => checkpoint_now(out, w, &g.state, &sha, &state, (s.steps, s.final_time), reporter),
                 _ => checkpoint_now(out, &sim.model, &sim.state(), &sha, &state, (s.steps, s.final_time), reporter),
             };
@@ -791,7 +792,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     }
     // the last converged step is always in the results, also when the run failed after it
     // (a part's state gathered whatever happened to the writer: every rank takes part)
-    let gathered = (parts && every > 0).then(|| sim.gather()).flatten();
+    let gathered = (parts && every > 0).then(|| sim.gather(false)).flatten();
     if let (Some(w), None) = (results.as_mut(), &results_error) {
         let snap = match (&gathered, &whole) {
             (Some(g), Some(w)) => g.snapshot(w),
@@ -1014,7 +1015,7 @@ fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoi
     let mut observer = |s: &Simulation, r: &StepReport| {
         let (signal, due) = step_flags(&*comm, 0, false);
         if part_output_due(r.step, every, probes, signal, due) {
-            s.gather();
+            s.gather(signal != 0 || due);
         }
         if signal != 0 {
             ControlFlow::Break("interrupted on rank 0".into())
@@ -1032,10 +1033,10 @@ fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoi
     };
     // the gathers of rank 0's last checkpoint and output step, in its order
     if matches!(&result, Ok(s) if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED) {
-        sim.gather();
+        sim.gather(true);
     }
     if every > 0 {
-        sim.gather();
+        sim.gather(false);
     }
     peak_memory(&*comm);
     Ok(match result {

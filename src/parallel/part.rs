@@ -263,23 +263,33 @@ impl RankPart {
 /// records (every index once over the processes); None on the others.
 /// With `everywhere`, every process gets the vector (an all-gather).
 pub fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize, everywhere: bool) -> Option<Vec<f64>> {
+    let mut out = vec![f64::NAN; n * bs];
+    let received = receive_records(comm, records, bs, everywhere, |i, v| {
+        if i < n {
+            out[i * bs..(i + 1) * bs].copy_from_slice(v);
+        }
+    });
+    received.then_some(out)
+}
+
+/// [`gather_records`] handing each record received to `put(index, values)` as it is read, so
+/// that the receiver holds the records once (not again in a vector of its own). Returns
+/// whether this process received them (rank 0, or every process with `everywhere`).
+pub fn receive_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, everywhere: bool, mut put: impl FnMut(usize, &[f64])) -> bool {
     let mut buf = Vec::new();
     for (i, v) in records {
         buf.push(i as f64);
         buf.extend_from_slice(v);
     }
     let all = if everywhere { comm.all_gather_varcount(&buf) } else { comm.gather_varcount_to_root(&buf) };
+    drop(buf);
     if !everywhere && !comm.is_root() {
-        return None;
+        return false;
     }
-    let mut out = vec![f64::NAN; n * bs];
     for r in all.chunks_exact(bs + 1) {
-        let i = r[0] as usize;
-        if i < n {
-            out[i * bs..(i + 1) * bs].copy_from_slice(&r[1..]);
-        }
+        put(r[0] as usize, &r[1..]);
     }
-    Some(out)
+    true
 }
 
 #[cfg(test)]

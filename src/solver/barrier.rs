@@ -513,18 +513,22 @@ impl Simulation {
     /// moving from progress `alpha0` to `alpha1` through the step, that meets no contact (CCD
     /// with IPC's conservative rescaling; 1 when nothing meets along the whole path).
     ///
-    /// On a part, the path may also bring one of its bodies within d̂ of another process's
-    /// body that is not its ghost, which its CCD cannot see: then [`NewtonFailure::Ghosts`]
-    /// (the step is made again on new parts).
+    /// On a part, the fraction of the path may also bring one of its bodies within d̂ of
+    /// another process's body that is not its ghost, which its CCD cannot see: then
+    /// [`NewtonFailure::Ghosts`] (the step is made again on new parts).
     pub(super) fn collision_free_fraction(&mut self, u0: &[f64], u1: &[f64], alpha0: f64, alpha1: f64) -> Result<f64, NewtonFailure> {
         let _t = self.clock.scope(Phase::ContactSearch);
         let x0 = self.coords(u0);
         let x1 = self.coords(u1);
         let Some(b) = self.barrier.as_ref() else { return Ok(1.0) };
         let dhat = b.contact.dhat;
-        let fraction = b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1));
-        self.check_ghosts(&x0, Some(&x1), dhat)?;
-        Ok(self.sys.min(fraction))
+        let fraction = self.sys.min(b.contact.collision_free_step(&x0, &x1, &b.walls_at(alpha0), &b.walls_at(alpha1)));
+        if self.sys.part.is_some() {
+            // (the line search goes no farther than the fraction along the path)
+            let reached: Vec<[f64; 2]> = x0.iter().zip(&x1).map(|(a, z)| [a[0] + fraction * (z[0] - a[0]), a[1] + fraction * (z[1] - a[1])]).collect();
+            self.check_ghosts(&x0, Some(&reached), dhat)?;
+        }
+        Ok(fraction)
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged

@@ -520,20 +520,25 @@ impl Simulation {
     /// the run bit for bit.
     pub fn state(&self) -> SimState {
         SimState {
-            scalars: SimScalars {
-                time: self.sol.time,
-                run: self.run.clone(),
-                stab_all: self.springs.all,
-                stab_viscous: self.springs.viscous,
-                stab_energy: self.springs.energy,
-                timing: self.clock.timing(),
-                contact: self.contact.as_ref().map(|c| c.state()),
-                barrier: self.barrier.as_ref().map(|b| b.state()),
-                partition: PartitionTotals { repartitions: self.sys.partition.repartitions, kept: self.sys.partition.kept, moved: self.sys.partition.moved, time_s: self.sys.partition.time_s },
-            },
+            scalars: self.scalars(),
             sol: self.sol.clone(),
             u_prev: self.u_prev.clone(),
             dynamics: self.dynamics.as_ref().map(|d| [d.u.clone(), d.v.clone(), d.a.clone(), d.g.clone()]),
+        }
+    }
+
+    /// The scalars of [`Simulation::state`].
+    pub(super) fn scalars(&self) -> SimScalars {
+        SimScalars {
+            time: self.sol.time,
+            run: self.run.clone(),
+            stab_all: self.springs.all,
+            stab_viscous: self.springs.viscous,
+            stab_energy: self.springs.energy,
+            timing: self.clock.timing(),
+            contact: self.contact.as_ref().map(|c| c.state()),
+            barrier: self.barrier.as_ref().map(|b| b.state()),
+            partition: PartitionTotals { repartitions: self.sys.partition.repartitions, kept: self.sys.partition.kept, moved: self.sys.partition.moved, time_s: self.sys.partition.time_s },
         }
     }
 

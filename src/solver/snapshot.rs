@@ -10,7 +10,6 @@ use super::{RunState, SimState, Simulation, Solution};
 use crate::assembly::ElementFields;
 use crate::contact::NodalContact;
 use crate::element::N_ENH;
-use crate::material::MatState;
 use crate::model::Model;
 
 /// A converged state as the output reads it (see the module docs).
@@ -53,6 +52,9 @@ impl Snapshot<'_> {
 pub struct Gathered {
     pub state: SimState,
     pub nodal: Option<NodalContact>,
+    /// Whether the whole state was gathered (a checkpoint may be written of it), or only what
+    /// the output reads.
+    pub complete: bool,
 }
 
 impl Gathered {
@@ -70,40 +72,52 @@ impl Gathered {
 }
 
 /// Values per element in a gathered record: the four Gauss points' material states (6 each)
-/// and stresses (4 each), pressure, Θ, the enhanced modes, λ and j₀.
+/// and stresses (4 each), pressure, Θ, the enhanced modes, λ and j₀ — or, for the output only
+/// ([`OUTPUT_RECORD`]), the stresses and the equivalent plastic and creep strains.
 const ELEMENT_RECORD: usize = 4 * 6 + 4 * 4 + 2 + N_ENH + 2;
+const OUTPUT_RECORD: usize = 4 * 4 + 4 * 2;
 
-fn element_record(sol: &Solution, e: usize, out: &mut Vec<f64>) {
+fn element_record(sol: &Solution, e: usize, complete: bool, out: &mut Vec<f64>) {
     let f = &sol.fields;
-    for q in &f.states[e] {
-        out.extend(q.cp_inv);
-        out.extend([q.eps_p, q.eps_c]);
-    }
     for s in &f.sig[e] {
         out.extend(s);
     }
-    out.extend([f.pressure[e], f.theta[e]]);
-    out.extend(f.alpha[e]);
-    out.extend([sol.lambda[e], sol.j0[e]]);
+    for q in &f.states[e] {
+        if complete {
+            out.extend(q.cp_inv);
+        }
+        out.extend([q.eps_p, q.eps_c]);
+    }
+    if complete {
+        out.extend([f.pressure[e], f.theta[e]]);
+        out.extend(f.alpha[e]);
+        out.extend([sol.lambda[e], sol.j0[e]]);
+    }
 }
 
-/// The element fields, multipliers and j₀ of `n` elements from their records.
-fn from_element_records(v: &[f64], n: usize) -> (ElementFields, Vec<f64>, Vec<f64>) {
-    let mut f = ElementFields::new(n);
-    let (mut lambda, mut j0) = (vec![0.0; n], vec![1.0; n]);
-    for (e, r) in v.chunks_exact(ELEMENT_RECORD).enumerate().take(n) {
-        for g in 0..4 {
-            let q = &r[6 * g..6 * g + 6];
-            f.states[e][g] = MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
-            f.sig[e][g].copy_from_slice(&r[24 + 4 * g..24 + 4 * g + 4]);
-        }
-        f.pressure[e] = r[40];
-        f.theta[e] = r[41];
-        f.alpha[e].copy_from_slice(&r[42..42 + N_ENH]);
-        lambda[e] = r[42 + N_ENH];
-        j0[e] = r[43 + N_ENH];
+/// Element `e`'s fields (and with `complete` its multiplier and j₀) from its record `r`.
+fn put_element_record(r: &[f64], e: usize, complete: bool, sol: &mut Solution) {
+    let f = &mut sol.fields;
+    for g in 0..4 {
+        f.sig[e][g].copy_from_slice(&r[4 * g..4 * g + 4]);
     }
-    (f, lambda, j0)
+    let w = if complete { 6 } else { 2 };
+    for g in 0..4 {
+        let q = &r[16 + w * g..16 + w * (g + 1)];
+        let st = &mut f.states[e][g];
+        if complete {
+            st.cp_inv = [q[0], q[1], q[2], q[3]];
+        }
+        (st.eps_p, st.eps_c) = (q[w - 2], q[w - 1]);
+    }
+    if complete {
+        let r = &r[40..];
+        f.pressure[e] = r[0];
+        f.theta[e] = r[1];
+        f.alpha[e].copy_from_slice(&r[2..2 + N_ENH]);
+        sol.lambda[e] = r[2 + N_ENH];
+        sol.j0[e] = r[3 + N_ENH];
+    }
 }
 
 impl Simulation {
@@ -129,19 +143,23 @@ impl Simulation {
     /// bodies from the processes owning them; the counters, energies and contact parameters,
     /// which every process holds alike, rank 0's), None on the other processes. Without a
     /// part: the state itself. Collective on a part.
-    pub fn gather(&self) -> Option<Gathered> {
-        self.gather_to(false)
+    ///
+    /// With `complete` false only what the output reads is gathered (the displacements, the
+    /// stresses, the equivalent strains, the contact's nodal values): the rest of the state
+    /// holds its initial values and must not be checkpointed ([`Gathered::complete`]).
+    pub fn gather(&self, complete: bool) -> Option<Gathered> {
+        self.gather_to(false, complete)
     }
 
-    /// [`Simulation::gather`] onto every process (each with its own counters and timings): to
-    /// make the parts again from. Collective on a part.
+    /// [`Simulation::gather`] (complete) onto every process (each with its own counters and
+    /// timings): to make the parts again from. Collective on a part.
     pub fn gather_all(&self) -> Gathered {
-        self.gather_to(true).expect("an all-gather gives every process the state")
+        self.gather_to(true, true).expect("an all-gather gives every process the state")
     }
 
-    fn gather_to(&self, everywhere: bool) -> Option<Gathered> {
+    fn gather_to(&self, everywhere: bool, complete: bool) -> Option<Gathered> {
         let Some(p) = &self.sys.part else {
-            return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned() });
+            return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned(), complete: true });
         };
         let comm = p.nodes.comm();
         let whole = self.model.whole_facts();
@@ -164,34 +182,45 @@ impl Simulation {
                 }
             }
         }
-        let nodes = crate::parallel::part::gather_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, whole.n_nodes, everywhere);
-        let own_elements: Vec<usize> = (0..self.model.elements.len()).filter(|&e| self.model.elem_body[e] < p.own_bodies).collect();
-        let mut local = Vec::with_capacity(own_elements.len() * ELEMENT_RECORD);
-        for &e in &own_elements {
-            element_record(&self.sol, e, &mut local);
-        }
-        let elements = crate::parallel::part::gather_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * ELEMENT_RECORD..(i + 1) * ELEMENT_RECORD])), ELEMENT_RECORD, whole.n_elements, everywhere);
-        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, everywhere);
-        let (Some(nodes), Some(elements), Some(areas)) = (nodes, elements, areas) else { return None };
-        let nn = whole.n_nodes;
-        let mut state = self.state();
-        let (fields, lambda, j0) = from_element_records(&elements, whole.n_elements);
-        state.sol = Solution { time: self.sol.time, u: (0..nn).flat_map(|n| [nodes[n * node_bs], nodes[n * node_bs + 1]]).collect(), fields, lambda, j0 };
-        state.u_prev = (0..nn).flat_map(|n| [nodes[n * node_bs + 2], nodes[n * node_bs + 3]]).collect();
-        state.scalars.run.area0_body = areas;
-        state.scalars.run.remesh_baseline = vec![None; whole.n_bodies];
-        let nodal = with_nodal.then(|| {
-            let r = |n: usize| &nodes[n * node_bs + 4..(n + 1) * node_bs];
-            NodalContact {
-                pressure: (0..nn).map(|n| r(n)[0]).collect(),
-                shear: (0..nn).map(|n| r(n)[1]).collect(),
-                gap: (0..nn).map(|n| r(n)[2]).collect(),
-                status: (0..nn).map(|n| r(n)[3] as i32).collect(),
-                force: (0..nn).map(|n| [r(n)[4], r(n)[5]]).collect(),
-                wall_force: (0..node_bs - 10).map(|w| (0..nn).map(|n| r(n)[6 + w]).collect()).collect(),
+        // (every record goes straight into the whole state: the receiver holds it once)
+        let (nn, ne) = (whole.n_nodes, whole.n_elements);
+        let (mut u, mut u_prev) = (vec![0.0; 2 * nn], vec![0.0; 2 * nn]);
+        let nw = node_bs.saturating_sub(10);
+        let mut nodal = with_nodal.then(|| NodalContact { pressure: vec![0.0; nn], shear: vec![0.0; nn], gap: vec![f64::NAN; nn], status: vec![0; nn], force: vec![[0.0; 2]; nn], wall_force: vec![vec![0.0; nn]; nw] });
+        let received = crate::parallel::part::receive_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, everywhere, |n, r| {
+            if n >= nn {
+                return;
+            }
+            u[2 * n..2 * n + 2].copy_from_slice(&r[..2]);
+            u_prev[2 * n..2 * n + 2].copy_from_slice(&r[2..4]);
+            if let Some(c) = nodal.as_mut() {
+                (c.pressure[n], c.shear[n], c.gap[n], c.status[n]) = (r[4], r[5], r[6], r[7] as i32);
+                c.force[n] = [r[8], r[9]];
+                for (w, v) in c.wall_force.iter_mut().zip(&r[10..]) {
+                    w[n] = *v;
+                }
             }
         });
-        Some(Gathered { state, nodal })
+        drop(local);
+        let own_elements: Vec<usize> = (0..self.model.elements.len()).filter(|&e| self.model.elem_body[e] < p.own_bodies).collect();
+        let bs = if complete { ELEMENT_RECORD } else { OUTPUT_RECORD };
+        let mut local = Vec::with_capacity(own_elements.len() * bs);
+        for &e in &own_elements {
+            element_record(&self.sol, e, complete, &mut local);
+        }
+        let mut sol = Solution { time: self.sol.time, u, fields: ElementFields::new(ne), lambda: vec![0.0; ne], j0: vec![1.0; ne] };
+        let got_elements = crate::parallel::part::receive_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * bs..(i + 1) * bs])), bs, everywhere, |e, r| {
+            if e < ne {
+                put_element_record(r, e, complete, &mut sol);
+            }
+        });
+        drop(local);
+        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, everywhere);
+        let (true, true, Some(areas)) = (received, got_elements, areas) else { return None };
+        let mut state = SimState { scalars: self.scalars(), sol, u_prev, dynamics: None };
+        state.scalars.run.area0_body = areas;
+        state.scalars.run.remesh_baseline = vec![None; whole.n_bodies];
+        Some(Gathered { state, nodal, complete })
     }
 
     /// On a part: continue from `whole`, the whole model's state (a checkpoint's, which every
