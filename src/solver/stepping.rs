@@ -44,7 +44,9 @@ impl Simulation {
                     interrupted = true;
                     break;
                 }
-                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && self.is_jammed(self.run.last_report.as_ref()) => {
+                // (a part whose ghosts no longer cover its contacts is not jammed: the caller
+                // makes the parts again and goes on)
+                Err(SolveError::StepFailed { time, dt, cause, .. }) if self.model.stop.jam && !matches!(cause, NewtonFailure::Ghosts(_) | NewtonFailure::Part(_)) && self.is_jammed(self.run.last_report.as_ref()) => {
                     tracing::warn!(time, dt, %cause, "the walls cannot advance any more: jammed");
                     stop_reason = "jammed".to_string();
                     break;
