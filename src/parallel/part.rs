@@ -263,7 +263,7 @@ impl RankPart {
 /// records (every index once over the processes); None on the others.
 /// With `everywhere`, every process gets the vector (an all-gather).
 pub fn gather_records<'a>(comm: &dyn Collective, records: impl Iterator<Item = (usize, &'a [f64])>, bs: usize, n: usize, everywhere: bool) -> Option<Vec<f64>> {
-    let mut out = vec![f64::NAN; n * bs];
+    let mut out = if everywhere || comm.is_root() { vec![f64::NAN; n * bs] } else { Vec::new() };
     let received = receive_records(comm, records, bs, everywhere, |i, v| {
         if i < n {
             out[i * bs..(i + 1) * bs].copy_from_slice(v);

@@ -182,8 +182,10 @@ impl Simulation {
                 }
             }
         }
-        // (every record goes straight into the whole state: the receiver holds it once)
-        let (nn, ne) = (whole.n_nodes, whole.n_elements);
+        // (every record goes straight into the whole state: the receiver holds it once; the
+        // others allocate nothing of it)
+        let receives = everywhere || comm.is_root();
+        let (nn, ne) = if receives { (whole.n_nodes, whole.n_elements) } else { (0, 0) };
         let (mut u, mut u_prev) = (vec![0.0; 2 * nn], vec![0.0; 2 * nn]);
         let nw = node_bs.saturating_sub(10);
         let mut nodal = with_nodal.then(|| NodalContact { pressure: vec![0.0; nn], shear: vec![0.0; nn], gap: vec![f64::NAN; nn], status: vec![0; nn], force: vec![[0.0; 2]; nn], wall_force: vec![vec![0.0; nn]; nw] });
