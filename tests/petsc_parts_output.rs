@@ -28,11 +28,11 @@
 //! Needs Open MPI's `mpirun` and PETSc (`scripts/setup.sh` installs both).
 #![cfg(feature = "petsc")]
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod common;
-use common::{mpfem, mpirun, tmpdir};
+use common::{mpfem, mpirun, read_csv, tmpdir};
 
 const CASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3_pcg.toml");
 const TOL: f64 = 1e-8;
@@ -47,14 +47,6 @@ fn run(case: &Path, ranks: Option<usize>, out: &Path, extra: &[&str]) -> Output 
     let o = cmd.output().unwrap_or_else(|e| panic!("cannot start {:?} (bash scripts/setup.sh installs Open MPI): {e}", cmd.get_program()));
     assert!(o.status.success(), "{ranks:?} ranks, {}: {:?}\nstderr: {}", case.display(), o.status, String::from_utf8_lossy(&o.stderr));
     o
-}
-
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut lines = text.lines();
-    let header = lines.next().expect("header").split(',').map(str::to_string).collect();
-    let rows = lines.map(|l| l.split(',').map(|v| v.trim().parse::<f64>().expect("number")).collect()).collect();
-    (header, rows)
 }
 
 /// The largest difference of `b` from `a` relative to `a`'s largest |value| (NaN where both
@@ -130,19 +122,26 @@ fn stopped_at(from: &Path, to: &Path, step: usize) {
     std::fs::write(to.join("history.csv"), kept.join("\n") + "\n").unwrap();
 }
 
+/// The MPI tests' 3 × 3 case with the barrier and faer (`edit` applied to it) written as
+/// `serial.toml` in `dir`, and the same with `linear = "petsc"` as `parts.toml`; asserts that
+/// each of `made` is in the edited case.
+fn serial_and_parts(dir: &Path, edit: impl Fn(String) -> String, made: &[&str]) -> (PathBuf, PathBuf) {
+    let text = std::fs::read_to_string(CASE).expect("case").replace("method = \"penalty\"", "method = \"barrier\"").replace("linear = \"pcg\"\npreconditioner = \"schwarz\"\n", "");
+    let serial_text = edit(text);
+    for m in made.iter().chain(&["method = \"barrier\""]) {
+        assert!(serial_text.contains(m), "the case moved: {m} not made");
+    }
+    assert!(!serial_text.contains("schwarz"), "the case moved: its solver table");
+    let (serial, parts) = (dir.join("serial.toml"), dir.join("parts.toml"));
+    std::fs::write(&serial, &serial_text).unwrap();
+    std::fs::write(&parts, serial_text.replacen("[solver]\n", "[solver]\nlinear = \"petsc\"\n", 1)).unwrap();
+    (serial, parts)
+}
+
 #[test]
 fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
     let dir = tmpdir("parts");
-    let text = std::fs::read_to_string(CASE).expect("case");
-    let serial_text = text
-        .replace("method = \"penalty\"", "method = \"barrier\"")
-        .replace("linear = \"pcg\"\npreconditioner = \"schwarz\"\n", "")
-        .replace("[output]\nevery = 0", "[output]\nevery = 2\ncheckpoint_every = 4\ncheckpoint_minutes = 0");
-    assert!(serial_text.contains("method = \"barrier\"") && serial_text.contains("every = 2") && !serial_text.contains("schwarz"), "the case moved");
-    let serial_case = dir.join("serial.toml");
-    std::fs::write(&serial_case, &serial_text).unwrap();
-    let parts_case = dir.join("parts.toml");
-    std::fs::write(&parts_case, serial_text.replacen("[solver]\n", "[solver]\nlinear = \"petsc\"\n", 1)).unwrap();
+    let (serial_case, parts_case) = serial_and_parts(&dir, |t| t.replace("[output]\nevery = 0", "[output]\nevery = 2\ncheckpoint_every = 4\ncheckpoint_minutes = 0"), &["every = 2"]);
 
     let serial = dir.join("serial");
     run(&serial_case, None, &serial, &["--quiet"]);
@@ -172,20 +171,11 @@ fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
 #[test]
 fn parts_are_made_again_when_the_particles_move_out_of_their_ghosts() {
     let dir = tmpdir("remade");
-    let text = std::fs::read_to_string(CASE).expect("case");
-    let serial_text = text
-        .replace("method = \"penalty\"", "method = \"barrier\"")
-        .replace("linear = \"pcg\"\npreconditioner = \"schwarz\"\n", "")
-        .replace("nx = 3\nny = 3\n", "nx = 2\nny = 2\n")
-        .replace("solid_ratio = 0.76\nmesh_size = 5.0", "solid_ratio = 0.45\nmesh_size = 2.5")
-        .replace("[stop]\nsolid_ratio = 0.80", "[stop]\nsolid_ratio = 0.62");
-    for edit in ["method = \"barrier\"", "nx = 2\nny = 2", "solid_ratio = 0.45", "solid_ratio = 0.62"] {
-        assert!(serial_text.contains(edit), "the case moved: {edit} not made");
-    }
-    let serial_case = dir.join("serial.toml");
-    std::fs::write(&serial_case, &serial_text).unwrap();
-    let parts_case = dir.join("parts.toml");
-    std::fs::write(&parts_case, serial_text.replacen("[solver]\n", "[solver]\nlinear = \"petsc\"\n", 1)).unwrap();
+    let (serial_case, parts_case) = serial_and_parts(
+        &dir,
+        |t| t.replace("nx = 3\nny = 3\n", "nx = 2\nny = 2\n").replace("solid_ratio = 0.76\nmesh_size = 5.0", "solid_ratio = 0.45\nmesh_size = 2.5").replace("[stop]\nsolid_ratio = 0.80", "[stop]\nsolid_ratio = 0.62"),
+        &["nx = 2\nny = 2", "solid_ratio = 0.45", "solid_ratio = 0.62"],
+    );
     let serial = dir.join("serial");
     run(&serial_case, None, &serial, &["--quiet"]);
     let two = dir.join("two");

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{mpirun, tmpdir};
+use common::{mpirun, read_csv, tmpdir};
 
 const CASE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3.toml");
 const CASE_ELASTIC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mpi_discs_3x3_pcg.toml");
@@ -61,14 +61,6 @@ fn variant(dir: &Path, name: &str, case: &str, edit: impl Fn(&str) -> String) ->
 /// The case's `[solver]` table with `lines` added at its top.
 fn with_solver(text: &str, lines: &str) -> String {
     text.replacen("[solver]\n", &format!("[solver]\n{lines}\n"), 1)
-}
-
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut lines = text.lines();
-    let header = lines.next().expect("header").split(',').map(str::to_string).collect();
-    let rows = lines.map(|l| l.split(',').map(|v| v.trim().parse::<f64>().expect("number")).collect()).collect();
-    (header, rows)
 }
 
 /// The largest difference of the compared columns from the reference, relative to each

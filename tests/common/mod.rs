@@ -62,6 +62,15 @@ pub fn run_quiet(dir: &Path, case: &str) -> PathBuf {
     out
 }
 
+/// A CSV file of numbers (`history.csv`, `probes.csv`): its header and rows.
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header = lines.next().expect("header").split(',').map(str::to_string).collect();
+    let rows = lines.map(|l| l.split(',').map(|v| v.trim().parse::<f64>().expect("number")).collect()).collect();
+    (header, rows)
+}
+
 /// Marks the processes [`on_ranks`] starts.
 pub const RANK_CHILD: &str = "MPFEM_TEST_RANK_CHILD";
 
