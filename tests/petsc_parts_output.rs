@@ -20,8 +20,8 @@
 //!   run's to 1e-8 (measured 1e-10: the parts miss no contact). The same from a 3 × 3 grid
 //!   with the jam test from solid ratio 0.5 (`[stop] jam_solid_ratio`): the parts are made
 //!   again at steps whose walls carry load, which must not end the run as a jam (it did —
-//!   stop reason "jammed" at solid ratio 0.55 — in this case and in the 64-polygon robustness
-//!   case on 2 ranks, before the jam test left that failure alone); its history is not
+//!   stop reason "jammed" — in this case and in the 64-polygon robustness case on 2 ranks,
+//!   before the jam test left that failure alone); its history is not
 //!   compared (the loose 3 × 3 grid takes another branch with faer's round-off than with
 //!   MUMPS's, serially too).
 //!
