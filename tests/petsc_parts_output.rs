@@ -168,6 +168,16 @@ fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// How often the run in `out` made its parts again (`summary.json`'s
+/// `run.partition.repartitions`), asserting at least once and that it reached its solid ratio.
+fn made_again_to_target(out: &Path, what: &str) -> u64 {
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary.json")).expect("summary.json parses");
+    assert_eq!(summary["run"]["stop_reason"].as_str(), Some("solid ratio reached"), "{what}: {}", summary["run"]);
+    let remade = summary["run"]["partition"]["repartitions"].as_u64().expect("run.partition.repartitions");
+    assert!(remade >= 1, "{what}: the parts were never made again: the case no longer tests it");
+    remade
+}
+
 #[test]
 fn parts_are_made_again_when_the_particles_move_out_of_their_ghosts() {
     let dir = tmpdir("remade");
@@ -180,10 +190,7 @@ fn parts_are_made_again_when_the_particles_move_out_of_their_ghosts() {
     run(&serial_case, None, &serial, &["--quiet"]);
     let two = dir.join("two");
     run(&parts_case, Some(2), &two, &["--quiet"]);
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(two.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["run"]["stop_reason"].as_str(), Some("solid ratio reached"), "{}", summary["run"]);
-    let remade = summary["run"]["partition"]["repartitions"].as_u64().expect("run.partition.repartitions");
-    assert!(remade >= 1, "the parts were never made again: the case no longer tests it");
+    let remade = made_again_to_target(&two, "2 x 2");
     let worst = history_difference(&serial, &two, "parts made again");
     println!("parts made again {remade} times on 2 ranks: history {worst:.2e} from the serial run");
 
@@ -194,10 +201,7 @@ fn parts_are_made_again_when_the_particles_move_out_of_their_ghosts() {
     std::fs::write(&jam_case, jam_text).unwrap();
     let jam = dir.join("jam");
     run(&jam_case, Some(2), &jam, &["--quiet"]);
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(jam.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["run"]["stop_reason"].as_str(), Some("solid ratio reached"), "3 x 3: {}", summary["run"]);
-    let remade = summary["run"]["partition"]["repartitions"].as_u64().expect("run.partition.repartitions");
-    assert!(remade >= 1, "3 x 3: the parts were never made again: the case no longer tests the jam");
+    let remade = made_again_to_target(&jam, "3 x 3");
     println!("3 x 3 from 0.45, jam test from 0.5: parts made again {remade} times, solid ratio reached");
     let _ = std::fs::remove_dir_all(&dir);
 }
