@@ -337,7 +337,9 @@ fn distributed_solve(whole: &Model, u: &[f64], eval: &BarrierEval, part: &RankPa
     }
     assert_eq!(map.n_global(), bw.len(), "the free equations over the processes are the whole model's");
     let _petsc = mpfem::linalg::petsc::start("").expect("PETSc");
-    let mut solver = make_rows(Some(Rows::Part(PartRows { map: map.clone(), dof })), true, 1e-10, 1000, 1e-8, comm.rank(), comm.size());
+    // (no particle numbers: the direct solve has no coarse space)
+    let particle = vec![mpfem::linalg::petsc::NO_PARTICLE; n_local];
+    let mut solver = make_rows(Some(Rows::Part(PartRows { map: map.clone(), dof, particle })), true, 1e-10, 1000, 1e-8, comm.rank(), comm.size());
     let mut x = vec![0.0; n_local];
     solver.analyze(&kp).expect("analyze");
     solver.factor(&kp).expect("factor");

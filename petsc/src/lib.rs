@@ -195,6 +195,22 @@ pub fn has_option(name: &str) -> Result<bool> {
     Ok(flag == sys::PetscBool::PETSC_TRUE)
 }
 
+/// The value of option `name` in the options database (with its leading dash, `-pc_type`);
+/// None when it is not set (or set without a value).
+pub fn option_value(name: &str) -> Result<Option<String>> {
+    let s = cstring(name, "PetscOptionsGetString")?;
+    let mut buf = vec![0 as std::os::raw::c_char; 256];
+    let mut flag = sys::PetscBool::PETSC_FALSE;
+    // SAFETY: PETSc is initialised; PETSc writes at most `buf.len()` bytes, NUL-terminated
+    check(unsafe { sys::PetscOptionsGetString(ptr::null_mut(), ptr::null(), s.as_ptr(), buf.as_mut_ptr(), buf.len(), &mut flag) }, "PetscOptionsGetString")?;
+    if flag != sys::PetscBool::PETSC_TRUE {
+        return Ok(None);
+    }
+    // SAFETY: NUL-terminated by PETSc
+    let v = unsafe { CStr::from_ptr(buf.as_ptr()) }.to_string_lossy().into_owned();
+    Ok((!v.is_empty()).then_some(v))
+}
+
 fn petsc_int(n: usize, what: &'static str) -> Result<sys::PetscInt> {
     sys::PetscInt::try_from(n).map_err(|_| Error { call: what, code: -1, message: format!("{n} does not fit PETSc's 32-bit indices") })
 }
@@ -220,6 +236,22 @@ impl Vector {
         // SAFETY: a is a valid matrix
         check(unsafe { sys::MatCreateVecs(a.m, ptr::null_mut(), &mut v) }, "MatCreateVecs")?;
         Ok(Self { v })
+    }
+
+    /// This process's range of the vector's global entries, [start, end). Not collective.
+    pub fn ownership_range(&self) -> Result<(usize, usize)> {
+        let (mut lo, mut hi) = (0, 0);
+        // SAFETY: valid vector
+        check(unsafe { sys::VecGetOwnershipRange(self.v, &mut lo, &mut hi) }, "VecGetOwnershipRange")?;
+        Ok((lo as usize, hi as usize))
+    }
+
+    /// The number of global entries. Not collective.
+    pub fn global_len(&self) -> Result<usize> {
+        let mut n = 0;
+        // SAFETY: valid vector
+        check(unsafe { sys::VecGetSize(self.v, &mut n) }, "VecGetSize")?;
+        Ok(n as usize)
     }
 
     /// The number of entries on this process (not collective).
@@ -347,22 +379,30 @@ impl Matrix {
     /// `row_ptr` (local rows + 1), `cols` (global column numbers, ascending in each row) and
     /// `values`. The local column range is the local row range. Collective.
     pub fn from_local_csr(n_global: usize, row_ptr: &[usize], cols: &[usize], values: &[f64]) -> Result<Self> {
+        let n_local = row_ptr.len().saturating_sub(1);
+        Self::from_local_csr_columns(n_global, n_local, n_global, row_ptr, cols, values)
+    }
+
+    /// [`Matrix::from_local_csr`] for a matrix of `n_rows` rows and `n_columns` columns,
+    /// `n_local_columns` of which are this process's column range (a prolongation's: its
+    /// coarse unknowns). Collective.
+    pub fn from_local_csr_columns(n_rows: usize, n_local_columns: usize, n_columns: usize, row_ptr: &[usize], cols: &[usize], values: &[f64]) -> Result<Self> {
         let n_local = row_ptr.len().checked_sub(1).ok_or(Error { call: "MatCreateMPIAIJWithArrays", code: -1, message: "empty row pointer".into() })?;
         let nnz = *row_ptr.last().unwrap_or(&0);
         if cols.len() != nnz || values.len() != nnz || row_ptr[0] != 0 {
             return Err(Error { call: "MatCreateMPIAIJWithArrays", code: -1, message: format!("inconsistent CSR: row_ptr ends at {nnz}, {} columns, {} values", cols.len(), values.len()) });
         }
-        if let Some(&c) = cols.iter().find(|&&c| c >= n_global) {
-            return Err(Error { call: "MatCreateMPIAIJWithArrays", code: -1, message: format!("column {c} outside the {n_global} columns") });
+        if let Some(&c) = cols.iter().find(|&&c| c >= n_columns) {
+            return Err(Error { call: "MatCreateMPIAIJWithArrays", code: -1, message: format!("column {c} outside the {n_columns} columns") });
         }
-        let rp: Vec<sys::PetscInt> = row_ptr.iter().map(|&v| petsc_int(v, "MatCreateMPIAIJWithArrays")).collect::<Result<_>>()?;
-        let cj: Vec<sys::PetscInt> = cols.iter().map(|&v| petsc_int(v, "MatCreateMPIAIJWithArrays")).collect::<Result<_>>()?;
-        let n_local = petsc_int(n_local, "MatCreateMPIAIJWithArrays")?;
+        let what = "MatCreateMPIAIJWithArrays";
+        let rp: Vec<sys::PetscInt> = row_ptr.iter().map(|&v| petsc_int(v, what)).collect::<Result<_>>()?;
+        let cj: Vec<sys::PetscInt> = cols.iter().map(|&v| petsc_int(v, what)).collect::<Result<_>>()?;
         let mut m: sys::Mat = ptr::null_mut();
         // SAFETY: consistent CSR arrays (checked above), copied by PETSc
         check(
-            unsafe { sys::MatCreateMPIAIJWithArrays(sys::PETSC_COMM_WORLD, n_local, n_local, petsc_int(n_global, "MatCreateMPIAIJWithArrays")?, petsc_int(n_global, "MatCreateMPIAIJWithArrays")?, rp.as_ptr(), cj.as_ptr(), values.as_ptr(), &mut m) },
-            "MatCreateMPIAIJWithArrays",
+            unsafe { sys::MatCreateMPIAIJWithArrays(sys::PETSC_COMM_WORLD, petsc_int(n_local, what)?, petsc_int(n_local_columns, what)?, petsc_int(n_rows, what)?, petsc_int(n_columns, what)?, rp.as_ptr(), cj.as_ptr(), values.as_ptr(), &mut m) },
+            what,
         )?;
         Ok(Self { m, nnz })
     }
@@ -475,6 +515,57 @@ impl Ksp {
         }
     }
 
+    /// A two-level multigrid preconditioner (`PCMG`) whose coarse space is spanned by the
+    /// columns of `prolongation` (fine rows × coarse unknowns), its coarse operator the Galerkin
+    /// product Pᵀ A P (made again at every set-up), solved by MUMPS (Cholesky for a `symmetric`
+    /// matrix, LU otherwise); the fine level smoothed by one Richardson iteration, damped by ½,
+    /// of block Jacobi with this process's rows cut into `blocks` (their lengths, in row order;
+    /// every process gives its own, an empty process `[0]`). Defaults the options database may then override
+    /// (`-mg_levels_ksp_type`, `-mg_levels_pc_type`, `-mg_coarse_pc_type`, …). Call before
+    /// [`Ksp::set_from_options`].
+    pub fn set_two_level(&mut self, prolongation: &Matrix, blocks: &[usize], symmetric: bool) -> Result<()> {
+        let pc = self.pc()?;
+        let mg = cstring("mg", "PCSetType")?;
+        let bjacobi = cstring("bjacobi", "PCSetType")?;
+        let richardson = cstring("richardson", "KSPSetType")?;
+        let preonly = cstring("preonly", "KSPSetType")?;
+        let direct = cstring(if symmetric { "cholesky" } else { "lu" }, "PCSetType")?;
+        let mumps = cstring("mumps", "PCFactorSetMatSolverType")?;
+        let lens: Vec<sys::PetscInt> = blocks.iter().map(|&n| petsc_int(n, "PCBJacobiSetLocalBlocks")).collect::<Result<_>>()?;
+        // SAFETY: valid handles; the strings and block lengths are copied by PETSc, which
+        // references the prolongation
+        unsafe {
+            check(sys::PCSetType(pc, mg.as_ptr()), "PCSetType")?;
+            check(sys::PCMGSetLevels(pc, 2, ptr::null_mut()), "PCMGSetLevels")?;
+            check(sys::PCMGSetInterpolation(pc, 1, prolongation.m), "PCMGSetInterpolation")?;
+            check(sys::PCMGSetGalerkin(pc, sys::PCMGGalerkinType_PC_MG_GALERKIN_BOTH), "PCMGSetGalerkin")?;
+            let mut smoother: sys::KSP = ptr::null_mut();
+            check(sys::PCMGGetSmoother(pc, 1, &mut smoother), "PCMGGetSmoother")?;
+            let mut spc: sys::PC = ptr::null_mut();
+            check(sys::KSPGetPC(smoother, &mut spc), "KSPGetPC")?;
+            check(sys::KSPSetType(smoother, richardson.as_ptr()), "KSPSetType")?;
+            check(sys::KSPRichardsonSetScale(smoother, 0.5), "KSPRichardsonSetScale")?;
+            check(sys::KSPSetTolerances(smoother, sys::PETSC_DEFAULT as f64, sys::PETSC_DEFAULT as f64, sys::PETSC_DEFAULT as f64, 1), "KSPSetTolerances")?;
+            check(sys::PCSetType(spc, bjacobi.as_ptr()), "PCSetType")?;
+            check(sys::PCBJacobiSetLocalBlocks(spc, lens.len() as sys::PetscInt, lens.as_ptr()), "PCBJacobiSetLocalBlocks")?;
+            let mut coarse: sys::KSP = ptr::null_mut();
+            check(sys::PCMGGetCoarseSolve(pc, &mut coarse), "PCMGGetCoarseSolve")?;
+            check(sys::KSPSetType(coarse, preonly.as_ptr()), "KSPSetType")?;
+            let mut cpc: sys::PC = ptr::null_mut();
+            check(sys::KSPGetPC(coarse, &mut cpc), "KSPGetPC")?;
+            check(sys::PCSetType(cpc, direct.as_ptr()), "PCSetType")?;
+            check(sys::PCFactorSetMatSolverType(cpc, mumps.as_ptr()), "PCFactorSetMatSolverType")?;
+        }
+        Ok(())
+    }
+
+    /// The Krylov method (`cg`, `gmres`, …) from now on, the preconditioner kept.
+    pub fn set_type(&mut self, ksp_type: &str) -> Result<()> {
+        let kt = cstring(ksp_type, "KSPSetType")?;
+        // SAFETY: valid KSP; the string is copied
+        check(unsafe { sys::KSPSetType(self.k, kt.as_ptr()) }, "KSPSetType")
+    }
+
     /// Read the options database (`-ksp_*`, `-pc_*`, `-mat_mumps_*`, …).
     pub fn set_from_options(&mut self) -> Result<()> {
         // SAFETY: valid KSP
@@ -546,15 +637,20 @@ impl Ksp {
         if p != "cholesky" {
             return Ok(None);
         }
-        let mut f: sys::Mat = ptr::null_mut();
-        let (mut neg, mut zero, mut pos) = (0, 0, 0);
-        // SAFETY: valid PC that has been set up
-        unsafe {
-            check(sys::PCFactorGetMatrix(self.pc()?, &mut f), "PCFactorGetMatrix")?;
-            check(sys::MatGetInertia(f, &mut neg, &mut zero, &mut pos), "MatGetInertia")?;
-        }
-        Ok(Some((neg as usize, zero as usize, pos as usize)))
+        factor_inertia(self.pc()?)
     }
+}
+
+/// The inertia (negative, zero, positive) of the factor of a set-up factorisation PC.
+fn factor_inertia(pc: sys::PC) -> Result<Option<(usize, usize, usize)>> {
+    let mut f: sys::Mat = ptr::null_mut();
+    let (mut neg, mut zero, mut pos) = (0, 0, 0);
+    // SAFETY: valid PC that has been set up
+    unsafe {
+        check(sys::PCFactorGetMatrix(pc, &mut f), "PCFactorGetMatrix")?;
+        check(sys::MatGetInertia(f, &mut neg, &mut zero, &mut pos), "MatGetInertia")?;
+    }
+    Ok(Some((neg as usize, zero as usize, pos as usize)))
 }
 
 impl Drop for Ksp {

@@ -131,7 +131,8 @@ pub trait LinearSolver: Send {
     fn name(&self) -> &str;
     /// Whether the last factorisation found the matrix positive definite (a Cholesky
     /// factorisation that did not fall back to an indefinite one); None when the solver cannot
-    /// tell (LU, iterative solvers).
+    /// tell (LU, iterative solvers). An iterative solver may answer Some(false) after a solve
+    /// that broke down on a negative curvature (PETSc's CG: `KSP_DIVERGED_INDEFINITE_*`).
     fn definite(&self) -> Option<bool> {
         None
     }
@@ -143,6 +144,13 @@ pub trait LinearSolver: Send {
     fn factor_definite(&mut self, a: &CsrMatrix) -> Result<bool, LinalgError> {
         self.factor(a)?;
         Ok(self.definite() != Some(false))
+    }
+    /// Solve a symmetric system that may be indefinite, with the last factorisation or
+    /// preconditioner: for an iterative solver whose method needs a positive definite matrix
+    /// (CG) a Krylov method that does not (GMRES, this solve only); the others solve as
+    /// [`LinearSolver::solve`] does (a direct solver's LDLᵀ is exact either way).
+    fn solve_indefinite(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
+        self.solve(a, b, x)
     }
     /// A solver of a process's part of a distributed matrix: the absolute row sums
     /// Σ_j |A_ij| of the whole rows of this process's own equations, as last factored (the

@@ -38,7 +38,13 @@ pub struct RowLayout {
     /// The reference position and the direction (0: x, 1: y) of each row's dof; None for a
     /// multiplier row. The rigid-body modes of the near-null space are built from these.
     pub dof: Vec<Option<([f64; 2], usize)>>,
+    /// The particle of each row (any numbering that tells particles apart; [`NO_PARTICLE`] for
+    /// a multiplier row): the coarse space of the two-level preconditioner (`-pc_type mg`).
+    pub particle: Vec<usize>,
 }
+
+/// [`RowLayout::particle`] and [`PartRows::particle`] of a row that belongs to no particle.
+pub const NO_PARTICLE: usize = usize::MAX;
 
 /// A process's part of the system ([`Rows::Part`]): the map of its equations (its own first,
 /// then its ghosts') and where each equation's dof is.
@@ -47,6 +53,8 @@ pub struct PartRows {
     pub map: std::sync::Arc<crate::comm::IndexMap>,
     /// The reference position and the direction (0: x, 1: y) of each local equation's dof.
     pub dof: Vec<Option<([f64; 2], usize)>>,
+    /// The particle of each local equation ([`RowLayout::particle`]).
+    pub particle: Vec<usize>,
 }
 
 /// How the rows of the systems reach the solver (see the module docs).
@@ -149,6 +157,9 @@ mod imp {
         Part { map: std::sync::Arc<crate::comm::IndexMap>, own: Vec<(usize, usize)>, send: Vec<Vec<usize>>, recv: Vec<Vec<usize>>, row_ptr: Vec<usize> },
     }
 
+    /// A row's dof (reference position and direction; None: a multiplier) and its particle.
+    type RowDof = (Option<([f64; 2], usize)>, usize);
+
     /// The PETSc objects of one sparsity pattern.
     struct Pattern {
         pattern_id: u64,
@@ -204,7 +215,7 @@ mod imp {
             for mode in 0..3 {
                 let v: Vec<f64> = dofs
                     .iter()
-                    .map(|d| match d {
+                    .map(|(d, _)| match d {
                         None => 0.0,
                         Some((p, c)) => match (mode, c) {
                             (0, 0) | (1, 1) => 1.0,
@@ -228,14 +239,39 @@ mod imp {
             }
             let mut ksp = Ksp::new().map_err(err)?;
             let pc = if self.symmetric { "cholesky" } else { "lu" };
-            ksp.set_defaults("preonly", pc, Some("mumps"), self.rtol, self.max_iterations).map_err(err)?;
+            let krylov = if self.symmetric { "cg" } else { "gmres" };
+            // `-pc_type mg` without levels of the user's: the particles' two-level preconditioner
+            let two_level = petsc::option_value("-pc_type").map_err(err)?.as_deref() == Some("mg") && !petsc::has_option("-pc_mg_levels").map_err(err)?;
+            if two_level {
+                ksp.set_defaults(krylov, "mg", None, self.rtol, self.max_iterations).map_err(err)?;
+                let space = CoarseSpace::of_rows(&dofs);
+                let counter = petsc::Vector::new(space.n_coarse).map_err(err)?;
+                let (start, _) = counter.ownership_range().map_err(err)?;
+                let n_coarse = counter.global_len().map_err(err)?;
+                let cols: Vec<usize> = space.cols.iter().map(|c| c + start).collect();
+                let rows = Vector::like_rows(&m).map_err(err)?.global_len().map_err(err)?;
+                let p = Matrix::from_local_csr_columns(rows, space.n_coarse, n_coarse, &space.row_ptr, &cols, &space.values).map_err(err)?;
+                // each particle's block solved exactly by the smoother (its zero pivots, a loose
+                // particle's rigid-body modes, shifted: those are the coarse space's), and the
+                // coarse operator's null pivots (a particle that nothing holds yet) detected
+                // and left out, with room for the delayed pivots an indefinite coarse
+                // operator brings (MUMPS ran out of its estimated workspace, INFOG(1) = −9, on
+                // 256 discs), unless the options say otherwise
+                for o in ["-mg_levels_sub_pc_type lu", "-mg_levels_sub_pc_factor_shift_type nonzero", "-mg_coarse_mat_mumps_icntl_24 1", "-mg_coarse_mat_mumps_icntl_14 200"] {
+                    if !petsc::has_option(o.split(' ').next().unwrap_or(o)).map_err(err)? {
+                        petsc::insert_options(o).map_err(err)?;
+                    }
+                }
+                ksp.set_two_level(&p, &space.blocks, self.symmetric).map_err(err)?;
+            } else {
+                ksp.set_defaults("preonly", pc, Some("mumps"), self.rtol, self.max_iterations).map_err(err)?;
+            }
             ksp.set_operator(&m).map_err(err)?;
             ksp.set_from_options().map_err(err)?;
             let (mut k, mut p, mut package) = ksp.types().map_err(err)?;
             if k == "preonly" && p != "lu" && p != "cholesky" && !petsc::has_option("-ksp_type").map_err(err)? {
                 // an iterative preconditioner (`-pc_type gamg`) alone: its Krylov method, CG for
                 // a symmetric tangent, GMRES otherwise (one application is not a solve)
-                let krylov = if self.symmetric { "cg" } else { "gmres" };
                 ksp.set_defaults(krylov, &p, None, self.rtol, self.max_iterations).map_err(err)?;
                 ksp.set_from_options().map_err(err)?;
                 (k, p, package) = ksp.types().map_err(err)?;
@@ -255,11 +291,11 @@ mod imp {
 
         /// The matrix of this process's rows of the whole matrix `a`, the sources of its values,
         /// and its rows' dofs.
-        fn whole_rows(&self, a: &CsrMatrix, layout: Option<&RowLayout>) -> Result<(Matrix, Sources, Vec<Option<([f64; 2], usize)>>), LinalgError> {
+        fn whole_rows(&self, a: &CsrMatrix, layout: Option<&RowLayout>) -> Result<(Matrix, Sources, Vec<RowDof>), LinalgError> {
             let n = a.nrows;
-            let whole = RowLayout { owner: vec![0; n], dof: vec![None; n] };
+            let whole = RowLayout { owner: vec![0; n], dof: vec![None; n], particle: vec![NO_PARTICLE; n] };
             let layout = layout.unwrap_or(&whole);
-            if layout.owner.len() != n || layout.dof.len() != n {
+            if layout.owner.len() != n || layout.dof.len() != n || layout.particle.len() != n {
                 return Err(LinalgError::Other(format!("the row layout has {} rows, the matrix {n}", layout.owner.len())));
             }
             if let Some(&o) = layout.owner.iter().find(|&&o| o >= self.size) {
@@ -300,17 +336,17 @@ mod imp {
             }
             let values: Vec<f64> = source.iter().map(|&k| a.values[k]).collect();
             let m = Matrix::from_local_csr(n, &row_ptr, &cols, &values).map_err(err)?;
-            let dofs = local_rows.iter().map(|&i| layout.dof[i]).collect();
+            let dofs = local_rows.iter().map(|&i| (layout.dof[i], layout.particle[i])).collect();
             Ok((m, Sources::Whole { global, local_rows, source }, dofs))
         }
 
         /// The matrix of this process's own rows of a part `a` (local equations, its own first,
         /// then its ghosts'): its own rows and the ghost rows the other processes send it, merged
         /// (the pattern goes to the owners here, once per pattern).
-        fn part_rows(&self, a: &CsrMatrix, part: &PartRows) -> Result<(Matrix, Sources, Vec<Option<([f64; 2], usize)>>), LinalgError> {
+        fn part_rows(&self, a: &CsrMatrix, part: &PartRows) -> Result<(Matrix, Sources, Vec<RowDof>), LinalgError> {
             let map = &part.map;
             let (n_own, n_local) = (map.n_owned(), map.n_local());
-            if a.nrows != n_local || part.dof.len() != n_local {
+            if a.nrows != n_local || part.dof.len() != n_local || part.particle.len() != n_local {
                 return Err(LinalgError::Other(format!("the part has {n_local} equations and {} dofs, the matrix {} rows", part.dof.len(), a.nrows)));
             }
             let start = map.start();
@@ -385,8 +421,127 @@ mod imp {
                 values[e] += a.values[k];
             }
             let m = Matrix::from_local_csr(map.n_global(), &row_ptr, &cols, &values).map_err(err)?;
-            let dofs = part.dof[..n_own].to_vec();
+            let dofs = part.dof[..n_own].iter().copied().zip(part.particle[..n_own].iter().copied()).collect();
             Ok((m, Sources::Part { map: map.clone(), own, send, recv, row_ptr }, dofs))
+        }
+    }
+
+    /// The coarse space of the two-level preconditioner on this process's rows: each
+    /// particle's rigid-body modes (two translations, a rotation about its centre) and uniform
+    /// strains (three), orthonormalised on the particle's rows (modes that vanish there, a
+    /// particle with fewer free dofs, are dropped). The particles are a process's own, whole,
+    /// so the prolongation has no entries off the process.
+    pub(super) struct CoarseSpace {
+        /// The prolongation's rows (this process's rows) in CSR, columns local to the process.
+        pub row_ptr: Vec<usize>,
+        pub cols: Vec<usize>,
+        pub values: Vec<f64>,
+        /// This process's coarse unknowns.
+        pub n_coarse: usize,
+        /// The smoother's blocks: the lengths of the runs of rows of one particle (a
+        /// multiplier row is a run of its own) when every particle's rows are one run; one
+        /// block of all the process's rows otherwise.
+        pub blocks: Vec<usize>,
+    }
+
+    impl CoarseSpace {
+        pub(super) fn of_rows(rows: &[RowDof]) -> Self {
+            let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+            let mut index = std::collections::HashMap::new();
+            for (i, (dof, particle)) in rows.iter().enumerate() {
+                if dof.is_some() && *particle != NO_PARTICLE {
+                    let g = *index.entry(*particle).or_insert_with(|| {
+                        groups.push((*particle, Vec::new()));
+                        groups.len() - 1
+                    });
+                    groups[g].1.push(i);
+                }
+            }
+            // per row: (column, value)
+            let mut entries: Vec<Vec<(usize, f64)>> = vec![Vec::new(); rows.len()];
+            let mut n_coarse = 0;
+            for (_, members) in &groups {
+                let pos = |i: usize| rows[i].0.map_or([0.0; 2], |d| d.0);
+                let n = members.len() as f64;
+                let c = members.iter().fold([0.0; 2], |s, &i| [s[0] + pos(i)[0] / n, s[1] + pos(i)[1] / n]);
+                let size = members.iter().map(|&i| (pos(i)[0] - c[0]).hypot(pos(i)[1] - c[1])).fold(0.0, f64::max);
+                let size = if size > 0.0 { size } else { 1.0 };
+                let mut kept: Vec<Vec<f64>> = Vec::new();
+                for mode in 0..6 {
+                    let mut v: Vec<f64> = members
+                        .iter()
+                        .map(|&i| {
+                            let (p, comp) = rows[i].0.unwrap_or(([0.0; 2], 0));
+                            let (dx, dy) = ((p[0] - c[0]) / size, (p[1] - c[1]) / size);
+                            match (mode, comp) {
+                                (0, 0) | (1, 1) => 1.0,
+                                (2, 0) => -dy,
+                                (2, _) => dx,
+                                (3, 0) => dx,
+                                (4, 1) => dy,
+                                (5, 0) => dy,
+                                (5, _) => dx,
+                                _ => 0.0,
+                            }
+                        })
+                        .collect();
+                    let before = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                    for q in &kept {
+                        let d: f64 = v.iter().zip(q).map(|(a, b)| a * b).sum();
+                        v.iter_mut().zip(q).for_each(|(a, b)| *a -= d * b);
+                    }
+                    let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                    if before > 0.0 && norm > 1e-8 * before {
+                        v.iter_mut().for_each(|a| *a /= norm);
+                        kept.push(v);
+                    }
+                }
+                for (j, q) in kept.iter().enumerate() {
+                    for (&i, &value) in members.iter().zip(q) {
+                        if value != 0.0 {
+                            entries[i].push((n_coarse + j, value));
+                        }
+                    }
+                }
+                n_coarse += kept.len();
+            }
+            let mut row_ptr = vec![0];
+            let (mut cols, mut values) = (Vec::new(), Vec::new());
+            for e in &entries {
+                cols.extend(e.iter().map(|x| x.0));
+                values.extend(e.iter().map(|x| x.1));
+                row_ptr.push(cols.len());
+            }
+            // the runs of rows of one particle
+            let mut runs: Vec<(usize, usize)> = Vec::new();
+            for (_, particle) in rows {
+                match runs.last_mut() {
+                    Some((p, len)) if *p == *particle && *particle != NO_PARTICLE => *len += 1,
+                    _ => runs.push((*particle, 1)),
+                }
+            }
+            let mut seen = std::collections::HashSet::new();
+            let one_run_each = runs.iter().all(|(p, _)| *p == NO_PARTICLE || seen.insert(*p));
+            // (otherwise one block of all its rows, an empty one on a process without rows:
+            // every process sets its blocks, or block Jacobi's set-up waits for them)
+            let blocks = if one_run_each && !runs.is_empty() { runs.iter().map(|r| r.1).collect() } else { vec![rows.len()] };
+            Self { row_ptr, cols, values, n_coarse, blocks }
+        }
+    }
+
+    /// PETSc's name of a KSP's reason to stop that is a failure.
+    fn reason_name(reason: i32) -> String {
+        match reason {
+            -2 => "KSP_DIVERGED_NULL".into(),
+            -3 => "KSP_DIVERGED_ITS (the iteration limit)".into(),
+            -4 => "KSP_DIVERGED_DTOL (the residual grew)".into(),
+            -5 => "KSP_DIVERGED_BREAKDOWN".into(),
+            -7 => "KSP_DIVERGED_NONSYMMETRIC".into(),
+            -8 => "KSP_DIVERGED_INDEFINITE_PC (an indefinite preconditioner)".into(),
+            -9 => "KSP_DIVERGED_NANORINF (NaN or infinity)".into(),
+            -10 => "KSP_DIVERGED_INDEFINITE_MAT (an indefinite matrix)".into(),
+            -11 => "KSP_DIVERGED_PC_FAILED (the preconditioner's set-up failed)".into(),
+            r => format!("KSP reason {r}"),
         }
     }
 
@@ -469,12 +624,27 @@ mod imp {
             p.ax.axpy(-1.0, &p.b).map_err(err)?;
             let (res, bn) = (p.ax.norm2().map_err(err)?, p.b.norm2().map_err(err)?);
             let rel = if bn > 0.0 { res / bn } else { res };
-            if info.reason < 0 || !rel.is_finite() {
-                return Err(if p.direct {
+            // (a breakdown once the true residual is below the tolerance is round-off in the
+            // last iteration's curvature: the update is the converged one)
+            let converged_anyway = !p.direct && rel.is_finite() && rel <= self.rtol;
+            if (info.reason < 0 && !converged_anyway) || !rel.is_finite() {
+                // CG's breakdown on a negative curvature of the matrix or of the preconditioner
+                // (KSP_DIVERGED_INDEFINITE_PC, _MAT), or its residual growing 10⁵ times or a
+                // zero curvature (_DTOL, _BREAKDOWN, what a preconditioner made from an
+                // indefinite matrix also does): how an iterative solve tells that the matrix is
+                // not positive definite
+                let indefinite = !p.direct && [-4, -5, -8, -10].contains(&info.reason);
+                let e = if p.direct {
                     LinalgError::Singular(format!("{}: KSP diverged (reason {}), relative residual {rel:.3e}", p.name, info.reason))
-                } else {
+                } else if info.reason == -3 {
                     LinalgError::NotConverged { iterations: info.iterations, residual: rel, tol: self.rtol }
-                });
+                } else {
+                    LinalgError::Other(format!("{}: the iterative solver did not converge: {} after {} iterations, relative residual {rel:.3e} (tolerance {:.1e})", p.name, reason_name(info.reason), info.iterations, self.rtol))
+                };
+                if indefinite {
+                    self.definite = Some(false);
+                }
+                return Err(e);
             }
             if p.direct && rel > self.singular_tol {
                 return Err(LinalgError::Singular(format!("{}: relative residual {rel:.3e} after the direct solve", p.name)));
@@ -493,6 +663,20 @@ mod imp {
                 }
             }
             Ok(SolveStats { iterations: info.iterations.max(1), relative_residual: rel })
+        }
+
+        fn solve_indefinite(&mut self, a: &CsrMatrix, b: &[f64], x: &mut [f64]) -> Result<SolveStats, LinalgError> {
+            let p = self.pattern.as_mut().ok_or(LinalgError::NotAnalyzed)?;
+            let (k, _, _) = p.ksp.types().map_err(err)?;
+            if p.direct || k != "cg" {
+                return self.solve(a, b, x);
+            }
+            p.ksp.set_type("gmres").map_err(err)?;
+            let r = self.solve(a, b, x);
+            let back = self.pattern.as_mut().ok_or(LinalgError::NotAnalyzed)?.ksp.set_type("cg").map_err(err);
+            let r = r?;
+            back?;
+            Ok(r)
         }
 
         fn name(&self) -> &str {

@@ -801,6 +801,60 @@ impl Simulation {
         self.factor()
     }
 
+    /// Solve for the Newton update (right-hand side `sys.r`). An iterative solver has no
+    /// factorisation to ask whether the tangent is positive definite: CG tells it by breaking
+    /// down on a negative curvature ([`LinearSolver::definite`] then answers false). The
+    /// tangent then gets what a Cholesky factorisation's inertia gives an indefinite one: out
+    /// of the descent, the exact Newton update (solved again by a Krylov method for indefinite
+    /// matrices, GMRES); in it ([`Simulation::factor_descent`]), each stage tried by solving
+    /// again: the barrier pairs' Hessians projected, then the diagonal shifted. So CG with the
+    /// particles' two-level preconditioner (`-pc_type mg`) takes the direct solve's path.
+    ///
+    /// [`LinearSolver::definite`]: crate::linalg::LinearSolver::definite
+    pub(super) fn solve_update(&mut self) -> Result<(), NewtonFailure> {
+        let before = self.sys.linear.definite();
+        let r = self.solve_linear();
+        // (only what the solve itself found: a factorisation's answer was known before it and
+        // acted on; a distributed solve's breakdown is every process's, the KSP's reason is
+        // collective)
+        if r.is_ok() || self.barrier.is_none() || before == Some(false) || self.sys.linear.definite() != Some(false) {
+            return r;
+        }
+        tracing::debug!("the iterative solve broke down on an indefinite tangent");
+        self.note_definite(false, false);
+        if !self.barrier.as_ref().is_some_and(|b| b.descent) {
+            self.sys.du.iter_mut().for_each(|v| *v = 0.0);
+            return self.solve_linear_with(true);
+        }
+        self.project_pair_hessians();
+        self.factor()?;
+        if self.solve_again() {
+            tracing::debug!("indefinite tangent made definite by projecting the pairs' Hessians");
+            return Ok(());
+        }
+        let last = self.barrier.as_ref().map_or(0.0, |b| b.shift);
+        let start = if last > 0.0 { (0.1 * last).max(SHIFT_MIN) } else { SHIFT_MIN };
+        let shifted = self.shift_until(start, 1.0, true);
+        if let Some(b) = self.barrier.as_mut() {
+            b.shift = shifted.unwrap_or(0.0);
+        }
+        match shifted {
+            Some(_) => Ok(()),
+            None => {
+                // (the last try's failure, as the solver reports it)
+                self.factor()?;
+                self.sys.du.iter_mut().for_each(|v| *v = 0.0);
+                self.solve_linear()
+            }
+        }
+    }
+
+    /// Solve with the tangent just factored, from a zero update: whether it succeeded.
+    fn solve_again(&mut self) -> bool {
+        self.sys.du.iter_mut().for_each(|v| *v = 0.0);
+        self.solve_linear().is_ok()
+    }
+
     /// Record whether the tangent just factored was definite; `from_root`: the answer is the
     /// solving process's alone and goes to the others.
     fn note_definite(&mut self, definite: bool, from_root: bool) {
@@ -855,6 +909,13 @@ impl Simulation {
     /// zero; raising it by |K_ii| left the tangent indefinite at τ = 1 (and a zero pivot of the
     /// indefinite fallback failed the step outright, measured).
     pub(super) fn shift_until_definite(&mut self, start: f64, tau_max: f64) -> Option<f64> {
+        self.shift_until(start, tau_max, false)
+    }
+
+    /// [`Simulation::shift_until_definite`]; `solve`: each shifted tangent is also solved
+    /// with (the right-hand side in `sys.r`), and a τ holds only when that solve succeeds (an
+    /// iterative solver tells that the tangent is indefinite by breaking down in the solve).
+    fn shift_until(&mut self, start: f64, tau_max: f64, solve: bool) -> Option<f64> {
         let mut pos = self.sys.kk.diagonal_positions();
         // (a part shifts its own equations' diagonal; its rows hold its own terms only, so
         // their sums are a lower bound of the whole rows')
@@ -877,7 +938,7 @@ impl Simulation {
                     self.sys.kk.values[p] = d + tau * s;
                 }
             }
-            if self.factor_definite() {
+            if self.factor_definite() && (!solve || self.solve_again()) {
                 tracing::debug!(tau, "indefinite tangent shifted");
                 return Some(tau);
             }

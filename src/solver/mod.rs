@@ -362,18 +362,25 @@ impl Simulation {
         let mut linear = if let Some(p) = &part {
             // a part's rows: its own and its ghosts' equations, PETSc over the processes
             let mut dof = vec![None; kk.nrows];
-            for (d, &q) in assembler.eq.iter().enumerate() {
-                if q != FIXED {
-                    dof[q] = Some((model.x0[d / 2], d % 2));
+            let mut particle = vec![crate::linalg::petsc::NO_PARTICLE; kk.nrows];
+            for (b, body) in model.bodies.iter().enumerate() {
+                for node in body.node_offset..body.node_offset + body.mesh.nodes.len() {
+                    for c in 0..2 {
+                        let q = assembler.eq[2 * node + c];
+                        if q != FIXED {
+                            dof[q] = Some((model.x0[node], c));
+                            particle[q] = b;
+                        }
+                    }
                 }
             }
-            let rows = crate::linalg::petsc::Rows::Part(crate::linalg::petsc::PartRows { map: p.eqs.clone(), dof });
+            let rows = crate::linalg::petsc::Rows::Part(crate::linalg::petsc::PartRows { map: p.eqs.clone(), dof, particle });
             crate::linalg::petsc::make_rows(Some(rows), symmetric, spec.pcg_tol, spec.pcg_max_iterations, singular_tol, comm.rank(), comm.size())
         } else if petsc {
             // each row to its particle's owner (the multiplier rows to rank 0), with its dof's
             // reference position and direction for the rigid-body modes
             let n_rows = kk.nrows;
-            let mut layout = crate::linalg::petsc::RowLayout { owner: vec![0; n_rows], dof: vec![None; n_rows] };
+            let mut layout = crate::linalg::petsc::RowLayout { owner: vec![0; n_rows], dof: vec![None; n_rows], particle: vec![crate::linalg::petsc::NO_PARTICLE; n_rows] };
             for (b, body) in model.bodies.iter().enumerate() {
                 let owner = par.as_ref().map_or(0, |p| p.body_owner[b]);
                 for node in body.node_offset..body.node_offset + body.mesh.nodes.len() {
@@ -382,6 +389,7 @@ impl Simulation {
                         if q != FIXED {
                             layout.owner[q] = owner;
                             layout.dof[q] = Some((model.x0[node], c));
+                            layout.particle[q] = b;
                         }
                     }
                 }

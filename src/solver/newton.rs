@@ -231,7 +231,7 @@ impl Simulation {
             }
         }
         self.sys.du.iter_mut().for_each(|v| *v = 0.0);
-        self.solve_linear()?;
+        self.solve_update()?;
         for (d, &q) in self.sys.assembler.eq.iter().enumerate() {
             if q != FIXED {
                 u[d] = u_n[d] + self.sys.du[q];
@@ -325,7 +325,7 @@ impl Simulation {
             self.sys.du.iter_mut().for_each(|v| *v = 0.0);
             let r_true = self.barrier.is_some().then(|| self.sys.r.clone());
             self.add_wall_motion();
-            self.solve_linear()?;
+            self.solve_update()?;
             let energy = self.sys.dot(&self.sys.du, &self.sys.r).abs();
             // with the barrier: the slope of the incremental potential along the update is
             // −R(u)·Δu (R = −∇Π), positive g0 = R·Δu for a descent direction

@@ -420,9 +420,16 @@ impl Simulation {
 
     /// Solve `kk du = r` (rank 0 solves, the others receive `du`).
     pub(super) fn solve_linear(&mut self) -> Result<(), NewtonFailure> {
+        self.solve_linear_with(false)
+    }
+
+    /// [`Simulation::solve_linear`]; `indefinite`: the tangent may be indefinite
+    /// ([`crate::linalg::LinearSolver::solve_indefinite`]).
+    pub(super) fn solve_linear_with(&mut self, indefinite: bool) -> Result<(), NewtonFailure> {
         let sys = &mut self.sys;
         let r = if sys.solves_here() {
-            match sys.linear.solve(&sys.kk, &sys.r, &mut sys.du) {
+            let solved = if indefinite { sys.linear.solve_indefinite(&sys.kk, &sys.r, &mut sys.du) } else { sys.linear.solve(&sys.kk, &sys.r, &mut sys.du) };
+            match solved {
                 Ok(st) => {
                     self.clock.count_solve(st.iterations);
                     Ok(())
