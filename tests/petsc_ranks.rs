@@ -10,9 +10,11 @@
 //! - A checkpoint of a 2-rank PETSc run continues on 3 ranks to the uninterrupted serial faer
 //!   history (1e-8).
 //! - CG + GAMG (`petsc_options = "-pc_type gamg"`: CG, as the tangent is symmetric, with the
-//!   rigid-body modes as GAMG's near-null space) on Cook's membrane (48 × 48 elements, linear
-//!   regime) on 2 ranks: the corner's displacement equals faer's Cholesky to 1e-7 relative (the
-//!   CG tolerance is 1e-10 of the residual, and κ of this mesh is about 1e5; measured 1e-12).
+//!   rigid-body modes as GAMG's near-null space) and CG with the particles' two-level
+//!   preconditioner (`-pc_type mg`) on Cook's membrane (48 × 48 elements, linear regime) on 2
+//!   ranks: the corner's displacement equals faer's Cholesky to 1e-7 relative (the CG
+//!   tolerance is 1e-10 of the residual, and κ of this mesh is about 1e5; measured 1e-12).
+//! - The two-level CG on contact (owned + ghost parts, the barrier): see its test.
 //! - An iterative solve that cannot converge fails the run cleanly (exit 1, the reason named,
 //!   every rank ended), never a panic or a hang.
 //!
@@ -157,21 +159,115 @@ fn corner_uy(dir: &Path) -> f64 {
 }
 
 #[test]
-fn cg_with_gamg_matches_the_direct_solve() {
+fn cg_with_gamg_and_with_the_particles_two_levels_matches_the_direct_solve() {
     let dir = tmpdir("gamg");
     let probes = "\n[output]\nprobes = [{ name = \"corner\", point = [48.0, 60.0] }]\n";
     let direct = variant(&dir, "cook", COOK, |t| t.replace("divisions = [16, 16]", "divisions = [48, 48]") + probes);
-    let gamg = variant(&dir, "cook-gamg", direct.to_str().unwrap(), |t| with_solver(t, "linear = \"petsc\"\npetsc_options = \"-pc_type gamg\"\npcg_tol = 1e-10"));
     let reference = dir.join("faer");
     run_ok(&direct, None, &reference);
-    let out = dir.join("gamg");
-    run_ok(&gamg, Some(2), &out);
-    assert_eq!(summary(&out)["run"]["linear_solver"].as_str(), Some("petsc cg+gamg"));
-    let (a, b) = (corner_uy(&out), corner_uy(&reference));
+    let b = corner_uy(&reference);
     assert!(b.abs() > 1e-6, "the corner does not move: {b}");
-    let rel = (a - b).abs() / b.abs();
-    println!("CG + GAMG on 2 ranks: corner u_y {a:.12e} against faer's {b:.12e} (relative {rel:.1e})");
-    assert!(rel <= 1e-7, "CG + GAMG: corner u_y {a} vs {b} (relative {rel:.1e})");
+    // (one body on 2 ranks: the two-level preconditioner's rank 1 holds no rows, no coarse
+    // unknowns and one empty block)
+    for (pc, name) in [("gamg", "petsc cg+gamg"), ("mg", "petsc cg+mg")] {
+        let case = variant(&dir, &format!("cook-{pc}"), direct.to_str().unwrap(), |t| with_solver(t, &format!("linear = \"petsc\"\npetsc_options = \"-pc_type {pc}\"\npcg_tol = 1e-10")));
+        let out = dir.join(pc);
+        run_ok(&case, Some(2), &out);
+        assert_eq!(summary(&out)["run"]["linear_solver"].as_str(), Some(name));
+        let a = corner_uy(&out);
+        let rel = (a - b).abs() / b.abs();
+        println!("CG + {pc} on 2 ranks: corner u_y {a:.12e} against faer's {b:.12e} (relative {rel:.1e})");
+        assert!(rel <= 1e-7, "CG + {pc}: corner u_y {a} vs {b} (relative {rel:.1e})");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The mean Krylov iterations per linear solve of the run in `out` (`summary.json`'s timing).
+fn iterations_per_solve(out: &Path) -> f64 {
+    let t = &summary(out)["run"]["timing"];
+    let (its, solves) = (t["linear_iterations"].as_f64().expect("linear_iterations"), t["linear_solves"].as_f64().expect("linear_solves"));
+    assert!(solves > 0.0, "no linear solve counted");
+    its / solves
+}
+
+/// CG with the particles' two-level preconditioner (`-pc_type mg`: each particle's rigid-body
+/// modes and uniform strains the coarse space, each particle's block the smoother's) on
+/// owned + ghost parts, the barrier contact.
+/// - The 3 × 3 J2 discs with friction 0.2, two steps (the second loaded, 33 MPa on the left
+///   wall): the history equals the serial faer run's to 1e-8 relative on 2 and 3 ranks (the CG
+///   tolerance is 1e-10; measured: equal to the 10 digits written). Further on the two engines
+///   may part: where a tangent is nearly singular, CG's breakdown and the Cholesky
+///   factorisation's pivots do not always agree on whether it is definite, and the descent then
+///   projects and shifts in different iterations.
+/// - The elastic 3 × 3 discs pressed from all four sides, where CG breaks down on indefinite
+///   tangents (corners facing corners): the run reaches its solid ratio with the breakdowns
+///   handled (the descent's projection and shifts, or the exact update by GMRES), in fewer than
+///   25 CG iterations a solve on average (measured 8–13; CG with GAMG needs thousands on these
+///   loose particles, docs/scaling/README.md).
+#[test]
+fn cg_with_the_particles_two_levels_follows_the_direct_solve_on_contact() {
+    let dir = tmpdir("two-level");
+    let serial_case = variant(&dir, "friction", CASE, |t| t.replace("method = \"penalty\"", "method = \"barrier\"").replace("end = 3.0", "end = 0.125"));
+    let serial = dir.join("serial");
+    run_ok(&serial_case, None, &serial);
+    let mg_case = variant(&dir, "friction-mg", serial_case.to_str().unwrap(), |t| with_solver(t, "linear = \"petsc\"\npetsc_options = \"-pc_type mg\"\npcg_tol = 1e-10"));
+    let (h0, r0) = read_csv(&serial.join("history.csv"));
+    assert_eq!(r0.len(), 2, "the case moved: {} steps", r0.len());
+    let p_left = h0.iter().position(|h| h == "p_left").expect("p_left");
+    assert!(r0[1][p_left] > 1.0, "the second step is not loaded: {}", r0[1][p_left]);
+    for ranks in [2, 3] {
+        let out = dir.join(format!("mg{ranks}"));
+        let o = run(&mg_case, Some(ranks), &out, &[]);
+        let said = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{ranks} ranks: {said}");
+        assert!(said.contains("(each its own particles and their neighbours"), "not a run on parts: {said}");
+        assert_eq!(summary(&out)["run"]["linear_solver"].as_str(), Some("petsc cg+mg"));
+        let (h1, r1) = read_csv(&out.join("history.csv"));
+        assert_eq!((&h0, r0.len()), (&h1, r1.len()), "{ranks} ranks: columns and steps");
+        let mut worst = 0.0f64;
+        for name in COMPARED {
+            let c = h0.iter().position(|h| h == name).expect("column");
+            let scale = r0.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+            for (a, b) in r1.iter().zip(&r0) {
+                worst = worst.max((a[c] - b[c]).abs() / scale);
+            }
+        }
+        let per_solve = iterations_per_solve(&out);
+        println!("CG + the two levels on {ranks} ranks: {worst:.2e} from the serial faer run, {per_solve:.1} CG iterations a solve");
+        assert!(worst <= TOL, "CG + the two levels on {ranks} ranks: {worst:.2e} > {TOL:e}");
+        assert!(per_solve <= 25.0, "{per_solve:.1} CG iterations a solve");
+    }
+
+    // the elastic discs pressed from all four sides: CG breaks down on indefinite tangents
+    let biaxial = variant(&dir, "biaxial", CASE_ELASTIC, |t| {
+        t.replace("method = \"penalty\"", "method = \"barrier\"")
+            .replace("linear = \"pcg\"\npreconditioner = \"schwarz\"\npcg_tol = 1e-12\n", "linear = \"petsc\"\npetsc_options = \"-pc_type mg\"\npcg_tol = 1e-10\n")
+            .replace("side = \"bottom\"\nposition = 0.0\n", "side = \"bottom\"\nposition = 0.0\nvelocity = 10.0\n")
+            .replace("side = \"top\"\nposition = 100.0\n", "side = \"top\"\nposition = 100.0\nvelocity = 10.0\n")
+    });
+    let text = std::fs::read_to_string(&biaxial).unwrap();
+    assert!(text.contains("-pc_type mg") && text.matches("velocity = 10.0").count() == 4, "the case moved: {text}");
+    let out = dir.join("biaxial");
+    let o = Command::new("mpirun")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_plm", "isolated")
+        .env("RUST_LOG", "mpfem=debug")
+        .args(["--oversubscribe", "--bind-to", "none", "-x", "RUST_LOG", "-n", "2", env!("CARGO_BIN_EXE_mpfem"), "run"])
+        .arg(&biaxial)
+        .arg("--out")
+        .arg(&out)
+        .args(["--quiet", "--no-plots", "--threads", "1"])
+        .output()
+        .expect("mpirun (bash scripts/setup.sh installs Open MPI)");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert_eq!(summary(&out)["run"]["stop_reason"].as_str(), Some("solid ratio reached"));
+    let breakdowns = stderr.matches("the iterative solve broke down on an indefinite tangent").count();
+    let per_solve = iterations_per_solve(&out);
+    println!("the biaxial discs: {breakdowns} CG breakdowns handled, {per_solve:.1} CG iterations a solve");
+    assert!(breakdowns >= 1, "CG never broke down: the case no longer tests it");
+    assert!(per_solve <= 25.0, "{per_solve:.1} CG iterations a solve");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
