@@ -20,13 +20,14 @@ import os
 import sys
 from xml.sax.saxutils import escape
 
-COLOURS = {"cholesky": "#1f77b4", "pcg-schwarz": "#d62728", "mumps": "#2ca02c", "parts": "#9467bd"}
-MARKERS = {"cholesky": "circle", "pcg-schwarz": "square", "mumps": "circle", "parts": "square"}
+COLOURS = {"cholesky": "#1f77b4", "pcg-schwarz": "#d62728", "mumps": "#2ca02c", "parts": "#9467bd", "parts-mg": "#ff7f0e"}
+MARKERS = {"cholesky": "circle", "pcg-schwarz": "square", "mumps": "circle", "parts": "square", "parts-mg": "circle"}
 LABELS = {
     "cholesky": "cholesky (gathered, rank 0 factors)",
     "pcg-schwarz": "pcg-schwarz (distributed)",
     "mumps": "mumps (PETSc, distributed LDLt)",
     "parts": "parts (own + ghost particles, barrier, MUMPS)",
+    "parts-mg": "parts, CG with the particles' two levels",
 }
 FONT = "DejaVu Sans, Helvetica, Arial, sans-serif"
 

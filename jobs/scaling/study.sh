@@ -19,7 +19,9 @@
 # direct_fallbacks column) and "mumps" (linear = "petsc": PETSc with MUMPS's distributed LDLt,
 # every rank factorising its particles' rows; needs a build with --features petsc) and "parts"
 # (linear = "petsc" with the barrier contact instead of the penalty method: each rank holds
-# only its own particles and their neighbours, the owned + ghost parts of issue 21). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
+# only its own particles and their neighbours, the owned + ghost parts of issue 21) and
+# "parts-mg" (the same parts, solved by CG with the particles' two-level preconditioner,
+# petsc_options = "-pc_type mg", pcg_tol = 1e-8). Every run: mpirun -n N ... --threads 1 (one thread a rank, also for
 # N = 1; THREADS changes it); wall time and phases from the run's summary.json (mpirun's start-up not included);
 # assembly_s = element + contact assembly, linear_s = linear solves, peak_mb = the largest peak
 # resident memory of the run's ranks (summary.json's peak_memory_mb).
@@ -35,7 +37,7 @@
 #   REPEAT     rounds over all runs (default 3; 1 with QUICK=1); scaling.csv keeps the fastest
 #   MESH_SIZE  element size in mm (default 2.5; smaller makes every job larger)
 #   THREADS    threads a rank (default 1; 0 = the node's cores divided among its ranks)
-#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz mumps parts")
+#   SOLVERS    the solvers to run (default "cholesky pcg-schwarz mumps parts"; "parts-mg" too)
 #   STRONG     the strong study's grid: STRONG x STRONG discs (default 16; 4 with QUICK=1; 32 is
 #              the 1,024-disc case)
 #   QUICK=1    tiny sizes (4 x 4 discs strong, 2 discs a rank weak, 2 steps), one round: a
@@ -84,7 +86,7 @@ mesh_size=${MESH_SIZE:-2.5}
 threads=${THREADS:-1}
 solvers=${SOLVERS:-cholesky pcg-schwarz mumps parts}
 for s in $solvers; do
-  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || [ "$s" = mumps ] || [ "$s" = parts ] || die "SOLVERS must name cholesky, pcg-schwarz, mumps and/or parts, got '$solvers'"
+  [ "$s" = cholesky ] || [ "$s" = pcg-schwarz ] || [ "$s" = mumps ] || [ "$s" = parts ] || [ "$s" = parts-mg ] || die "SOLVERS must name cholesky, pcg-schwarz, mumps, parts and/or parts-mg, got '$solvers'"
 done
 [[ $threads =~ ^[0-9]+$ ]] || die "THREADS must be a non-negative integer, got '$threads'"
 
@@ -111,6 +113,7 @@ write_case() { # file nx ny solver
     pcg-schwarz) solver_table=$'linear = "pcg"\npreconditioner = "schwarz"\npcg_tol = 1e-8' ;;
     mumps) solver_table='linear = "petsc"' ;;
     parts) solver_table='linear = "petsc"' contact=barrier ;;
+    parts-mg) solver_table=$'linear = "petsc"\npetsc_options = "-pc_type mg"\npcg_tol = 1e-8' contact=barrier ;;
     *) die "unknown solver $4" ;;
   esac
   cat >"$1" <<EOF
@@ -175,7 +178,7 @@ grep -q "2 MPI ranks" "$tmp/probe.log" || {
   head -5 "$tmp/probe.log" >&2
   die "$exe is not an MPI build (2 ranks ran as 2 serial runs): build it with cargo build --release --features petsc, or set MPFEM"
 }
-if [[ " $solvers " == *" mumps "* || " $solvers " == *" parts "* ]]; then
+if [[ " $solvers " == *" mumps "* || " $solvers " == *" parts "* || " $solvers " == *" parts-mg "* ]]; then
   write_case "$tmp/probe-mumps.toml" 2 2 mumps
   launch 2 "$tmp/probe-mumps.toml" "$tmp/probe-mumps" "$tmp/probe-mumps.log" || {
     tail -5 "$tmp/probe-mumps.log" >&2
