@@ -25,7 +25,11 @@
 //! iteration limit of `[solver] pcg_tol`, `pcg_max_iterations` and the rigid-body modes of
 //! the plane (two translations, one rotation about the origin; restricted to an aggregate
 //! inside one particle they are that particle's own) as the near-null space of algebraic
-//! multigrid. A direct solve whose residual ‖b − A x‖/‖b‖ stays above the solver's singular
+//! multigrid. `-pc_type mg` (without `-pc_mg_levels`) is the particles' two-level
+//! preconditioner (`CoarseSpace`: each particle's rigid-body modes and uniform strains
+//! the coarse space, its block the smoother's), the one that converges on loose particles; an
+//! iterative solve that breaks down on an indefinite matrix answers `definite() == Some(false)`
+//! and [`LinearSolver::solve_indefinite`] solves it again by GMRES. A direct solve whose residual ‖b − A x‖/‖b‖ stays above the solver's singular
 //! tolerance reports the matrix singular, as the faer solvers do.
 
 use super::{CsrMatrix, LinalgError, LinearSolver, SolveStats};
