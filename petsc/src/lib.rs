@@ -637,20 +637,15 @@ impl Ksp {
         if p != "cholesky" {
             return Ok(None);
         }
-        factor_inertia(self.pc()?)
+        let mut f: sys::Mat = ptr::null_mut();
+        let (mut neg, mut zero, mut pos) = (0, 0, 0);
+        // SAFETY: valid PC that has been set up
+        unsafe {
+            check(sys::PCFactorGetMatrix(self.pc()?, &mut f), "PCFactorGetMatrix")?;
+            check(sys::MatGetInertia(f, &mut neg, &mut zero, &mut pos), "MatGetInertia")?;
+        }
+        Ok(Some((neg as usize, zero as usize, pos as usize)))
     }
-}
-
-/// The inertia (negative, zero, positive) of the factor of a set-up factorisation PC.
-fn factor_inertia(pc: sys::PC) -> Result<Option<(usize, usize, usize)>> {
-    let mut f: sys::Mat = ptr::null_mut();
-    let (mut neg, mut zero, mut pos) = (0, 0, 0);
-    // SAFETY: valid PC that has been set up
-    unsafe {
-        check(sys::PCFactorGetMatrix(pc, &mut f), "PCFactorGetMatrix")?;
-        check(sys::MatGetInertia(f, &mut neg, &mut zero, &mut pos), "MatGetInertia")?;
-    }
-    Ok(Some((neg as usize, zero as usize, pos as usize)))
 }
 
 impl Drop for Ksp {

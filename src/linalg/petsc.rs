@@ -219,15 +219,7 @@ mod imp {
             for mode in 0..3 {
                 let v: Vec<f64> = dofs
                     .iter()
-                    .map(|(d, _)| match d {
-                        None => 0.0,
-                        Some((p, c)) => match (mode, c) {
-                            (0, 0) | (1, 1) => 1.0,
-                            (2, 0) => -p[1],
-                            (2, _) => p[0],
-                            _ => 0.0,
-                        },
-                    })
+                    .map(|(d, _)| d.map_or(0.0, |(p, c)| affine_mode(mode, p, c)))
                     .collect();
                 let mut vec = Vector::like_rows(&m).map_err(err)?;
                 vec.set_local(&v).map_err(err)?;
@@ -430,6 +422,19 @@ mod imp {
         }
     }
 
+    /// The value at position `p` in direction `comp` (0: x, 1: y) of the affine displacement
+    /// field `mode`: 0, 1 the translations, 2 the rotation about the origin, 3, 4 the normal
+    /// strains along x and y, 5 the shear strain. The first three are the rigid-body modes.
+    fn affine_mode(mode: usize, p: [f64; 2], comp: usize) -> f64 {
+        match (mode, comp) {
+            (0, 0) | (1, 1) => 1.0,
+            (2, 0) => -p[1],
+            (3, 0) | (2, 1) | (5, 1) => p[0],
+            (4, 1) | (5, 0) => p[1],
+            _ => 0.0,
+        }
+    }
+
     /// The coarse space of the two-level preconditioner on this process's rows: each
     /// particle's rigid-body modes (two translations, a rotation about its centre) and uniform
     /// strains (three), orthonormalised on the particle's rows (modes that vanish there, a
@@ -476,17 +481,7 @@ mod imp {
                         .iter()
                         .map(|&i| {
                             let (p, comp) = rows[i].0.unwrap_or(([0.0; 2], 0));
-                            let (dx, dy) = ((p[0] - c[0]) / size, (p[1] - c[1]) / size);
-                            match (mode, comp) {
-                                (0, 0) | (1, 1) => 1.0,
-                                (2, 0) => -dy,
-                                (2, _) => dx,
-                                (3, 0) => dx,
-                                (4, 1) => dy,
-                                (5, 0) => dy,
-                                (5, _) => dx,
-                                _ => 0.0,
-                            }
+                            affine_mode(mode, [(p[0] - c[0]) / size, (p[1] - c[1]) / size], comp)
                         })
                         .collect();
                     let before = v.iter().map(|x| x * x).sum::<f64>().sqrt();
