@@ -29,7 +29,7 @@ pub enum ModelError {
 }
 
 /// One meshed body.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Body {
     pub name: String,
     pub mesh: Mesh,
@@ -137,6 +137,17 @@ pub struct PartMap {
     pub node: Vec<usize>,
     /// The whole model's element for each element of the part.
     pub element: Vec<usize>,
+}
+
+/// One body as a process's part takes it for a ghost ([`Model::with_ghosts`]): the body (its
+/// offsets are set where it is put), its reference coordinates and its prescribed dofs,
+/// numbered from its node 0 (`2 n + c`). What its owner sends a process that needs it as a
+/// new ghost.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GhostBody {
+    pub body: Body,
+    pub x0: Vec<[f64; 2]>,
+    pub prescribed: Vec<crate::loading::PrescribedDof>,
 }
 
 /// What a part of a model ([`Model::part`]) keeps of the whole one: the figures that set
@@ -281,6 +292,61 @@ impl Model {
             .collect();
         new.x0 = x0;
         Ok((new, map))
+    }
+
+    /// Body `k` of this model as a ghost takes it ([`GhostBody`]). Panics for a body out of
+    /// range (the caller names its own bodies).
+    pub fn ghost_body(&self, k: usize) -> GhostBody {
+        let body = &self.bodies[k];
+        let nodes = body.node_offset..body.node_offset + body.mesh.n_nodes();
+        let dofs = 2 * nodes.start..2 * nodes.end;
+        let prescribed = self.loading.prescribed.iter().filter(|p| dofs.contains(&p.dof)).map(|p| crate::loading::PrescribedDof { dof: p.dof - dofs.start, ..*p }).collect();
+        GhostBody { body: body.clone(), x0: self.x0[nodes].to_vec(), prescribed }
+    }
+
+    /// This part of a model ([`Model::part`]) with other ghosts: its first `n_owned` bodies,
+    /// their nodes, elements, prescribed dofs, loads, output groups and probes as they are
+    /// (a part's loads, groups and probes are on its own bodies only, whose numbers do not
+    /// change), then `ghosts` in their order, numbered after them.
+    ///
+    /// # Errors
+    /// [`ModelError::NoBody`] for `n_owned` above the bodies, or a ghost whose reference
+    /// coordinates are not one per node of its mesh (the index of the ghost among `ghosts`).
+    pub fn with_ghosts(&self, n_owned: usize, ghosts: Vec<GhostBody>) -> Result<Model, ModelError> {
+        if n_owned > self.bodies.len() {
+            return Err(ModelError::NoBody(n_owned));
+        }
+        if let Some(k) = ghosts.iter().position(|g| g.x0.len() != g.body.mesh.n_nodes()) {
+            return Err(ModelError::NoBody(k));
+        }
+        let (n_nodes, n_elements) = self.bodies.get(n_owned).map_or((self.x0.len(), self.elements.len()), |b| (b.node_offset, b.elem_offset));
+        let mut new = Model {
+            bodies: self.bodies[..n_owned].to_vec(),
+            x0: self.x0[..n_nodes].to_vec(),
+            elements: self.elements[..n_elements].to_vec(),
+            elem_material: self.elem_material[..n_elements].to_vec(),
+            elem_body: self.elem_body[..n_elements].to_vec(),
+            reaction_groups: self.reaction_groups.clone(),
+            displacement_groups: self.displacement_groups.clone(),
+            probes: self.probes.clone(),
+            ..self.clone_parameters()
+        };
+        new.loading.loads = self.loading.loads.clone();
+        new.loading.prescribed = self.loading.prescribed.iter().filter(|p| p.dof < 2 * n_nodes).cloned().collect();
+        for GhostBody { body, x0, prescribed } in ghosts {
+            let (node_offset, elem_offset) = (new.x0.len(), new.elements.len());
+            let k = new.bodies.len();
+            for e in &body.mesh.elements {
+                new.elements.push(e.map(|n| n + node_offset));
+                new.elem_material.push(body.material);
+                new.elem_body.push(k);
+            }
+            new.x0.extend(x0);
+            new.loading.prescribed.extend(prescribed.into_iter().map(|p| crate::loading::PrescribedDof { dof: p.dof + 2 * node_offset, ..p }));
+            new.bodies.push(Body { node_offset, elem_offset, ..body });
+        }
+        new.loading.prescribed.sort_by_key(|p| p.dof);
+        Ok(new)
     }
 
     /// A copy of everything but the meshes, the numbering and what refers to nodes (for

@@ -589,6 +589,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             (sim, Some((step, time, path, state)), whole)
         }
     };
+    // the ghosts' reach of the parts (kept to grow them again)
+    let part_reach = whole.as_ref().map(RankPart::reach);
     // the model the output is written on: the whole one (a part's is its process's share)
     let shown = whole.as_ref().unwrap_or(&sim.model);
     let columns = crate::output::history_columns(shown);
@@ -761,7 +763,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let mut remade = None;
     let mut result = loop {
         let mut segment = sim.run_controlled(&mut observer);
-        if !go_on_with_new_parts(&mut sim, &mut segment, whole.as_ref(), &c, &comm, &stop_flag, &mut remade) {
+        if !go_on_with_new_parts(&mut sim, &mut segment, part_reach, &c, &stop_flag, &mut remade) {
             break segment;
         }
     };
@@ -990,17 +992,21 @@ fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: O
 /// Ranks 1..N of a run on parts ([`run`] on rank 0): the same part of the same model, the same
 /// collective steps of the output after every step (the flags of rank 0, the gathers), no
 /// output of their own. Returns what the run did; rank 0 says why a setup failed.
-fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
     let (every, probes) = (c.output.every, !whole.probes.is_empty());
-    let sim = match checkpoint {
+    // (the whole model, and a checkpoint's whole state, only until this process's part is made)
+    let (sim, reach) = match checkpoint {
         None if !whole.outside_walls().is_empty() => return Ok(RunOutcome::BadInput("a particle outside the walls".into())),
-        None => part_simulation(&whole, c, &comm, None, RankPart::reach(&whole)),
+        None => {
+            let reach = RankPart::reach(&whole);
+            (part_simulation(&whole, c, &comm, None, reach), reach)
+        }
         Some(ck) => match ck.run_state::<RunState>() {
-            Err(e) => Err(e.to_string()),
+            Err(e) => (Err(e.to_string()), 0.0),
             Ok(_) => match ck.model(whole) {
                 Ok(w) => {
-                    whole = w;
-                    part_simulation(&whole, c, &comm, Some(ck.state), RankPart::reach(&whole))
+                    let reach = RankPart::reach(&w);
+                    (part_simulation(&w, c, &comm, Some(ck.state), reach), reach)
                 }
                 Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
             },
@@ -1027,7 +1033,7 @@ fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoi
     let mut remade = None;
     let result = loop {
         let mut segment = sim.run_controlled(&mut observer);
-        if !go_on_with_new_parts(&mut sim, &mut segment, Some(&whole), c, &comm, &never, &mut remade) {
+        if !go_on_with_new_parts(&mut sim, &mut segment, Some(reach), c, &never, &mut remade) {
             break segment;
         }
     };
@@ -1046,37 +1052,36 @@ fn run_part_rank(c: &Case, mut whole: Model, comm: Arc<dyn Collective>, checkpoi
     })
 }
 
-/// After a run's segment on parts (`whole`: the model they are made from): when it stopped
-/// because a part's ghosts no longer hold every body within the contact reach of its own (the
-/// particles moved), make the parts again at the last converged state — every process gets the
-/// whole state, takes its share with the ghosts where the particles are now — and say to go
-/// on (true). False for any other end, and when the parts cannot be made again (`result` then
-/// says why). Collective on parts.
+/// After a run's segment on parts (`reach`: the ghosts' reach the parts were first made with,
+/// None when the run is not on parts): when it stopped because a part's ghosts no longer hold
+/// every body within the contact reach of its own (the particles moved), grow every part again
+/// at the last converged state ([`Simulation::regrown`]: each process keeps its own bodies and
+/// gets its new ghosts from their owners; nobody gathers the whole model or state) — and say
+/// to go on (true). False for any other end, and when the parts cannot be grown again
+/// (`result` then says why). Collective on parts.
 ///
-/// `remade` is the step at which the parts were last made again and the ghosts' reach then:
-/// made again at the same step (an iterate moved the particles farther than the reach), the
-/// reach doubles; at a later step it is [`RankPart::reach`] again.
-fn go_on_with_new_parts(sim: &mut Simulation, result: &mut Result<RunSummary, SolveError>, whole: Option<&Model>, c: &Case, comm: &Arc<dyn Collective>, stop: &Arc<AtomicUsize>, remade: &mut Option<(usize, f64)>) -> bool {
+/// `remade` is the step at which the parts were last grown again and the ghosts' reach then:
+/// grown again at the same step (an iterate moved the particles farther than the reach), the
+/// reach doubles; at a later step it is `reach` again.
+fn go_on_with_new_parts(sim: &mut Simulation, result: &mut Result<RunSummary, SolveError>, reach: Option<f64>, c: &Case, stop: &Arc<AtomicUsize>, remade: &mut Option<(usize, f64)>) -> bool {
     use crate::solver::NewtonFailure;
-    let (Some(whole), Err(SolveError::StepFailed { time, dt, dt_min, cause: NewtonFailure::Ghosts(why) })) = (whole, &*result) else { return false };
+    let (Some(reach0), Err(SolveError::StepFailed { time, dt, dt_min, cause: NewtonFailure::Ghosts(why) })) = (reach, &*result) else { return false };
     let (time, dt, dt_min) = (*time, *dt, *dt_min);
     let step = sim.step();
     let reach = match *remade {
         Some((at, reach)) if at == step => 2.0 * reach,
-        _ => RankPart::reach(whole),
+        _ => reach0,
     };
     *remade = Some((step, reach));
-    tracing::info!(time, step, reach, %why, "the parts are made again: the particles moved out of their ghost layers");
-    let mut state = sim.gather_all().state;
-    state.scalars.partition.repartitions += 1;
-    match part_simulation(whole, c, comm, Some(state), reach) {
+    tracing::info!(time, step, reach, %why, "the parts are grown again: the particles moved out of their ghost layers");
+    match sim.regrown(c.time.clone(), c.solver.clone(), reach) {
         Ok(mut s) => {
             s.set_interrupt(Arc::clone(stop));
             *sim = s;
             true
         }
         Err(e) => {
-            *result = Err(SolveError::StepFailed { time, dt, dt_min, cause: NewtonFailure::Part(format!("the parts could not be made again ({why}): {e}")) });
+            *result = Err(SolveError::StepFailed { time, dt, dt_min, cause: NewtonFailure::Part(format!("the parts could not be grown again ({why}): {e}")) });
             false
         }
     }

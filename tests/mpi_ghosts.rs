@@ -16,6 +16,11 @@
 //! - the forward scatter gives every ghost node its owner's values exactly, and rank 0 gathers
 //!   the whole model's node and element vectors from the owners exactly (for the output) and
 //!   sends each process its part of a whole-model vector exactly (for a restart);
+//! - a part grown again without the whole model (`RankPart::regrow`: its own bodies kept, its
+//!   new ghosts sent by their owners) is the part made from the whole model with the same
+//!   reach at the same coordinates, exactly (bodies, reference coordinates, meshes,
+//!   elements, prescribed dofs, the node map, the whole model's node, element and equation
+//!   numbers): from no ghosts to the neighbours, to the neighbours' neighbours, and back;
 //! - (feature `petsc`) the distributed tangent: each process assembles its owned elements'
 //!   and its pairs' terms (plus a diagonal shift on its own dofs) into the rows of its own and
 //!   its ghost equations, PETSc (MUMPS LDLᵀ) gets the ghost rows through their owners, and the
@@ -203,6 +208,22 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
     assert!(m.n_nodes() < whole.n_nodes() && m.elements.len() < whole.elements.len(), "rank {rank} holds {} of {} nodes, {} of {} elements", m.n_nodes(), whole.n_nodes(), m.elements.len(), whole.elements.len());
     assert_eq!(part.nodes.n_global(), whole.n_nodes());
 
+    // grown again: from a part without ghosts (made where the discs are apart) to the
+    // neighbours within d̂ + h where they are pressed, to those within a disc's diameter (the
+    // neighbours kept, the next ones new), and back (the farther ones dropped)
+    let lonely = RankPart::new(&whole, &whole.x0, &owner, 0.0, comm.clone()).expect("a part without ghosts");
+    assert_eq!(lonely.bodies.len(), lonely.n_owned_bodies, "rank {rank}: the discs are apart at the start");
+    let at = |p: &RankPart| -> Vec<[f64; 2]> { p.whole.node.iter().map(|&g| x[g]).collect() };
+    let near = RankPart::regrow(lonely.view(), &at(&lonely), dhat + h).expect("grown to the neighbours");
+    same_part(&near, &part, "the neighbours");
+    let far_reach = 25.0;
+    let far = RankPart::regrow(near.view(), &at(&near), far_reach).expect("grown farther");
+    let far_whole = RankPart::new(&whole, &x, &owner, far_reach, comm.clone()).expect("the farther part");
+    assert!(far.bodies.len() > near.bodies.len(), "rank {rank}: a disc's diameter holds more ghosts than d̂ + h");
+    same_part(&far, &far_whole, "the neighbours' neighbours");
+    let back = RankPart::regrow(far.view(), &at(&far), dhat + h).expect("grown back");
+    same_part(&back, &part, "back to the neighbours");
+
     // the distributed residual: owned elements, owned first sides, reverse scatter
     let u_part = part.restrict(&u, 2);
     let xp = coords(m, &u_part);
@@ -272,6 +293,23 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
         worst / scale,
         sums[0]
     )
+}
+
+/// That `a` (a part grown again) is `b` (the part made from the whole model), exactly.
+fn same_part(a: &RankPart, b: &RankPart, what: &str) {
+    let rank = a.nodes.comm().rank();
+    let m = (&a.model, &b.model);
+    assert_eq!((&a.bodies, a.n_owned_bodies), (&b.bodies, b.n_owned_bodies), "rank {rank}, {what}: the bodies");
+    assert_eq!(m.0.bodies, m.1.bodies, "rank {rank}, {what}: the bodies' meshes and offsets");
+    assert_eq!(m.0.x0, m.1.x0, "rank {rank}, {what}: the reference coordinates");
+    assert_eq!((&m.0.elements, &m.0.elem_body, &m.0.elem_material), (&m.1.elements, &m.1.elem_body, &m.1.elem_material), "rank {rank}, {what}: the elements");
+    assert_eq!(m.0.loading, m.1.loading, "rank {rank}, {what}: the prescribed dofs and loads");
+    assert_eq!((&m.0.reaction_groups, &m.0.displacement_groups, &m.0.probes), (&m.1.reaction_groups, &m.1.displacement_groups, &m.1.probes), "rank {rank}, {what}: the output groups");
+    assert_eq!(m.0.whole, m.1.whole, "rank {rank}, {what}: the whole model's facts");
+    assert_eq!((a.nodes.n_owned(), a.nodes.ghosts(), a.nodes.ghost_owners()), (b.nodes.n_owned(), b.nodes.ghosts(), b.nodes.ghost_owners()), "rank {rank}, {what}: the node map");
+    assert_eq!(a.whole, b.whole, "rank {rank}, {what}: the whole model's nodes and elements");
+    assert_eq!(a.whole_eq, b.whole_eq, "rank {rank}, {what}: the whole model's equations");
+    assert_eq!(a.layout, b.layout, "rank {rank}, {what}: the bodies' layout");
 }
 
 /// The diagonal shift of the tangents (N/mm per dof): holds the discs' free rotations.

@@ -13,7 +13,8 @@
 //! them, and an [`IndexMap`] moves values between the owners and the ghosts.
 
 use crate::comm::{Collective, IndexMap, IndexMapError};
-use crate::model::{Model, ModelError, PartMap};
+use crate::model::{Body, GhostBody, Model, ModelError, PartMap};
+use crate::mesh::Mesh;
 use std::sync::Arc;
 
 /// The ghosts of process `rank`: the bodies other processes own (`owner`) whose boxes come
@@ -72,6 +73,32 @@ impl DistributedNumbering {
     }
 }
 
+/// What every process of a run on parts keeps of the whole model's bodies: a few numbers a
+/// body, from which the parts are grown again without the whole model ([`RankPart::regrow`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyLayout {
+    /// The process owning each body (fixed for the run).
+    pub owner: Vec<usize>,
+    /// Each body's node count.
+    pub n_nodes: Vec<usize>,
+    /// The whole model's node and element of each body's first.
+    pub node_offset: Vec<usize>,
+    pub elem_offset: Vec<usize>,
+}
+
+impl BodyLayout {
+    /// The layout of `whole`'s bodies owned by `owner`.
+    pub fn new(whole: &Model, owner: &[usize]) -> Self {
+        let b = &whole.bodies;
+        Self {
+            owner: owner.to_vec(),
+            n_nodes: b.iter().map(|b| b.mesh.n_nodes()).collect(),
+            node_offset: b.iter().map(|b| b.node_offset).collect(),
+            elem_offset: b.iter().map(|b| b.elem_offset).collect(),
+        }
+    }
+}
+
 /// Why a part cannot be made.
 #[derive(Debug, thiserror::Error)]
 pub enum PartError {
@@ -85,6 +112,8 @@ pub enum PartError {
     Owners(String),
     #[error("the part's equations: {0}")]
     Equations(String),
+    #[error("the new ghosts: {0}")]
+    Migration(String),
 }
 
 /// One process's part of a distributed model (see the module docs).
@@ -105,6 +134,20 @@ pub struct RankPart {
     /// in dof order, [`crate::assembly::number_equations`]; [`crate::assembly::FIXED`] for a
     /// prescribed dof): where a quantity defined on the whole model's equations is read.
     pub whole_eq: Vec<usize>,
+    /// Every body's owner, size and place in the whole model.
+    pub layout: Arc<BodyLayout>,
+}
+
+/// A part as [`RankPart::regrow`] reads it (the fields of a [`RankPart`], wherever they are
+/// kept: a simulation holds them apart).
+pub struct PartView<'a> {
+    pub model: &'a Model,
+    pub nodes: &'a IndexMap,
+    pub bodies: &'a [usize],
+    pub n_owned_bodies: usize,
+    pub whole: &'a PartMap,
+    pub whole_eq: &'a [usize],
+    pub layout: &'a Arc<BodyLayout>,
 }
 
 impl RankPart {
@@ -161,7 +204,119 @@ impl RankPart {
         let (model, map) = whole.part(&bodies, owned.len())?;
         let (eq, _) = crate::assembly::number_equations(whole.n_dofs(), whole.loading.prescribed.iter().map(|p| p.dof));
         let whole_eq = map.node.iter().flat_map(|&n| [eq[2 * n], eq[2 * n + 1]]).collect();
-        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq })
+        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq, layout: Arc::new(BodyLayout::new(whole, owner)) })
+    }
+
+    /// This part's fields as [`RankPart::regrow`] reads them.
+    pub fn view(&self) -> PartView<'_> {
+        PartView { model: &self.model, nodes: &self.nodes, bodies: &self.bodies, n_owned_bodies: self.n_owned_bodies, whole: &self.whole, whole_eq: &self.whole_eq, layout: &self.layout }
+    }
+
+    /// The part `part` with its ghosts chosen again: the other processes' bodies within
+    /// `reach` of its own at coordinates `x` (one per node of the part; its own bodies' are
+    /// read), as [`RankPart::new`] would choose them on the whole model — without it. Its own
+    /// bodies keep their owner, their place and their numbers; a ghost it keeps is taken from
+    /// its own model, and a new one is sent by its owner (its mesh, reference coordinates and
+    /// prescribed dofs, [`GhostBody`]); the ghosts' whole equation numbers come from their
+    /// owners through the new node map. What is exchanged is the bodies' boxes (five numbers
+    /// a body, to every process) and the new ghosts, so no process ever holds the whole
+    /// model. Collective.
+    ///
+    /// # Errors
+    /// Coordinates of another length than the part's nodes, boxes that are not finite, a
+    /// negative reach, or a ghost its owner cannot send — on every process alike.
+    pub fn regrow(part: PartView<'_>, x: &[[f64; 2]], reach: f64) -> Result<Self, PartError> {
+        let comm = part.nodes.comm_arc();
+        let (rank, size) = (comm.rank(), comm.size());
+        let layout = part.layout;
+        let nb = layout.owner.len();
+        let n_own = part.n_owned_bodies;
+        let mut problem = (x.len() != part.model.n_nodes()).then(|| format!("{} coordinates for the part's {} nodes", x.len(), part.model.n_nodes()));
+        // every process's own bodies' boxes, to every process
+        let mine: Vec<f64> = match problem {
+            Some(_) => Vec::new(),
+            None => crate::distribute::particles_at(part.model, x).iter().zip(part.bodies).take(n_own).flat_map(|(b, &g)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect(),
+        };
+        let all = comm.all_gather_varcount(&mine);
+        let mut boxes = vec![partition::Particle { elements: 1, min: [0.0; 2], max: [0.0; 2] }; nb];
+        for r in all.chunks_exact(5) {
+            if let Some(b) = boxes.get_mut(r[0] as usize) {
+                (b.min, b.max) = ([r[1], r[2]], [r[3], r[4]]);
+            }
+        }
+        drop(all);
+        let ghosts = ghost_bodies(&boxes, &layout.owner, rank, reach)?;
+        drop(boxes);
+        // the new ghosts this process does not hold, asked of their owners
+        let held = |g: usize| part.bodies[n_own..].binary_search(&g).ok().map(|k| n_own + k);
+        let mut ask = vec![Vec::new(); size];
+        for &g in ghosts.iter().filter(|&&g| held(g).is_none()) {
+            ask[layout.owner[g]].push(g as f64);
+        }
+        let asked = comm.exchange(&ask);
+        let mut send = vec![Vec::new(); size];
+        for (r, list) in asked.iter().enumerate() {
+            for &g in list {
+                match part.bodies[..n_own].binary_search(&(g as usize)) {
+                    Ok(k) => {
+                        send[r].push(g);
+                        write_ghost(&part.model.ghost_body(k), &mut send[r]);
+                    }
+                    Err(_) => problem = problem.or(Some(format!("process {r} asked for body {g}, which is not one of process {rank}'s"))),
+                }
+            }
+        }
+        let got = comm.exchange(&send);
+        drop(send);
+        let mut fresh = std::collections::BTreeMap::new();
+        for (r, buf) in got.iter().enumerate() {
+            let mut at = &buf[..];
+            while !at.is_empty() {
+                match read_usize(&mut at).and_then(|g| read_ghost(&mut at).map(|b| (g, b))) {
+                    Ok((g, b)) => {
+                        fresh.insert(g, b);
+                    }
+                    Err(e) => {
+                        problem = problem.or(Some(format!("the bodies sent by process {r}: {e}")));
+                        break;
+                    }
+                }
+            }
+        }
+        drop(got);
+        let mut new_ghosts = Vec::with_capacity(ghosts.len());
+        for &g in &ghosts {
+            match held(g).map(|k| part.model.ghost_body(k)).or_else(|| fresh.remove(&g)) {
+                Some(b) if b.x0.len() == layout.n_nodes[g] => new_ghosts.push(b),
+                _ => problem = problem.or(Some(format!("body {g}, a new ghost, was not received whole"))),
+            }
+        }
+        // (every process goes on to the node map, so that none waits for one that failed)
+        let failed = comm.max(if problem.is_some() { 1.0 } else { 0.0 }) > 0.0;
+        let numbering = DistributedNumbering::new(&layout.owner, &layout.n_nodes, size);
+        let ghost_nodes: Vec<usize> = if failed { Vec::new() } else { ghosts.iter().flat_map(|&b| numbering.body_start[b]..numbering.body_start[b] + layout.n_nodes[b]).collect() };
+        let nodes = IndexMap::new(Arc::clone(&comm), numbering.rank_nodes[rank], ghost_nodes)?;
+        if failed {
+            return Err(PartError::Migration(problem.unwrap_or_else(|| "on another process".into())));
+        }
+        let model = part.model.with_ghosts(n_own, new_ghosts)?;
+        let own_nodes = part.nodes.n_owned();
+        let own_elements = model.bodies.get(n_own).map_or(model.elements.len(), |b| b.elem_offset);
+        let mut whole = PartMap { node: part.whole.node[..own_nodes].to_vec(), element: part.whole.element[..own_elements].to_vec() };
+        for (b, &g) in model.bodies[n_own..].iter().zip(&ghosts) {
+            whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
+            whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
+        }
+        // the ghosts' whole equations from their owners (−1: prescribed)
+        let fixed = crate::assembly::FIXED;
+        let mut eq: Vec<f64> = (0..2 * nodes.n_local()).map(|d| match part.whole_eq.get(d) {
+            Some(&q) if d < 2 * own_nodes && q != fixed => q as f64,
+            _ => -1.0,
+        }).collect();
+        nodes.forward(&mut eq, 2);
+        let whole_eq = eq.iter().map(|&q| if q < 0.0 { fixed } else { q as usize }).collect();
+        let bodies = part.bodies[..n_own].iter().chain(&ghosts).copied().collect();
+        Ok(Self { model, bodies, n_owned_bodies: n_own, nodes, whole, whole_eq, layout: Arc::clone(layout) })
     }
 
     /// The part's slice of a vector of the whole model's nodes (`bs` values per node).
@@ -257,6 +412,106 @@ impl RankPart {
     pub fn owned_elements(&self) -> Vec<bool> {
         self.model.elem_body.iter().map(|&b| b < self.n_owned_bodies).collect()
     }
+}
+
+/// A ghost body as numbers (for [`Collective::exchange`]): name, material, mesh size,
+/// contact length, nodes and reference coordinates, elements, boundary, edge sets, prescribed
+/// dofs, each list after its length. Every count and index is below 2⁵³, so exact in an f64.
+fn write_ghost(g: &GhostBody, out: &mut Vec<f64>) {
+    fn text(t: &str, out: &mut Vec<f64>) {
+        out.push(t.len() as f64);
+        out.extend(t.bytes().map(f64::from));
+    }
+    let (b, m) = (&g.body, &g.body.mesh);
+    text(&b.name, out);
+    out.extend([b.material as f64, b.mesh_size, b.contact_h, m.nodes.len() as f64]);
+    out.extend(m.nodes.iter().chain(&g.x0).flatten());
+    out.push(m.elements.len() as f64);
+    out.extend(m.elements.iter().flatten().map(|&n| n as f64));
+    out.push(m.boundary.len() as f64);
+    out.extend(m.boundary.iter().flatten().map(|&n| n as f64));
+    out.push(m.edge_sets.len() as f64);
+    for (name, edges) in &m.edge_sets {
+        text(name, out);
+        out.push(edges.len() as f64);
+        out.extend(edges.iter().flatten().map(|&n| n as f64));
+    }
+    out.push(g.prescribed.len() as f64);
+    for p in &g.prescribed {
+        out.extend([p.dof as f64, p.value, p.amplitude as f64]);
+    }
+}
+
+/// The next number of `at` as a count or index (a whole number from 0 to 2⁵³).
+fn read_usize(at: &mut &[f64]) -> Result<usize, String> {
+    let (&v, rest) = at.split_first().ok_or("the record ends early")?;
+    *at = rest;
+    if v >= 0.0 && v <= 9.007_199_254_740_992e15 && v.fract() == 0.0 {
+        Ok(v as usize)
+    } else {
+        Err(format!("{v} is not a count"))
+    }
+}
+
+/// The next `n` numbers of `at` (at most what is left).
+fn read_slice<'a>(at: &mut &'a [f64], n: usize) -> Result<&'a [f64], String> {
+    if n > at.len() {
+        return Err(format!("{n} numbers asked, {} left", at.len()));
+    }
+    let (v, rest) = at.split_at(n);
+    *at = rest;
+    Ok(v)
+}
+
+/// The next `n` records of `K` indices below `below`.
+fn read_indices<const K: usize>(at: &mut &[f64], below: usize) -> Result<Vec<[usize; K]>, String> {
+    let n = read_usize(at)?;
+    let v = read_slice(at, n.checked_mul(K).ok_or("too many indices")?)?;
+    v.chunks_exact(K)
+        .map(|c| {
+            let mut r = [0; K];
+            for (r, &x) in r.iter_mut().zip(c) {
+                *r = read_usize(&mut &[x][..])?;
+                if *r >= below {
+                    return Err(format!("index {r} of {below}"));
+                }
+            }
+            Ok(r)
+        })
+        .collect()
+}
+
+/// A ghost body written by [`write_ghost`], with every count and index checked.
+fn read_ghost(at: &mut &[f64]) -> Result<GhostBody, String> {
+    fn text(at: &mut &[f64]) -> Result<String, String> {
+        let n = read_usize(at)?;
+        let bytes = read_slice(at, n)?.iter().map(|&v| if (0.0..256.0).contains(&v) { Ok(v as u8) } else { Err(format!("{v} is not a byte")) }).collect::<Result<Vec<u8>, String>>()?;
+        String::from_utf8(bytes).map_err(|e| e.to_string())
+    }
+    let name = text(at)?;
+    let material = read_usize(at)?;
+    let &[mesh_size, contact_h] = read_slice(at, 2)? else { unreachable!("two numbers were read") };
+    let n = read_usize(at)?;
+    let xy = read_slice(at, n.checked_mul(4).ok_or("too many nodes")?)?;
+    let points = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<_>>();
+    let (nodes, x0) = (points(&xy[..2 * n]), points(&xy[2 * n..]));
+    let elements = read_indices::<4>(at, n)?;
+    let boundary = read_indices::<2>(at, n)?;
+    let mut edge_sets = std::collections::BTreeMap::new();
+    for _ in 0..read_usize(at)? {
+        let set = text(at)?;
+        edge_sets.insert(set, read_indices::<2>(at, n)?);
+    }
+    let prescribed = (0..read_usize(at)?)
+        .map(|_| {
+            let dof = read_usize(at)?;
+            let value = read_slice(at, 1)?[0];
+            let amplitude = read_usize(at)?;
+            if dof < 2 * n { Ok(crate::loading::PrescribedDof { dof, value, amplitude }) } else { Err(format!("prescribed dof {dof} of {}", 2 * n)) }
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    let mesh = Mesh { nodes, elements, boundary, edge_sets };
+    Ok(GhostBody { body: Body { name, mesh, material, node_offset: 0, elem_offset: 0, mesh_size, contact_h }, x0, prescribed })
 }
 
 /// Rank 0's vector of `n` records of `bs` values, each process sending `(index, values)`

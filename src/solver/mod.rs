@@ -230,7 +230,7 @@ impl Simulation {
         let (eq, _) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
         let comm = part.nodes.comm_arc();
         let eqs = part.equation_map(&eq).map_err(|e| SolveError::Linear(LinalgError::Other(e.to_string())))?;
-        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole } = part;
+        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole, layout } = part;
         let own_dofs = 2 * nodes.n_owned();
         let own_eqs = eqs.n_owned();
         // the whole model's equation of each of the part's equations
@@ -240,7 +240,7 @@ impl Simulation {
                 eq_whole[q] = whole_eq.get(d).copied().unwrap_or(FIXED);
             }
         }
-        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, whole };
+        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, dof_whole_eq: whole_eq, layout, whole };
         Self::build_with(model, time, spec, comm, None, Some(sys))
     }
 

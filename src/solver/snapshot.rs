@@ -4,9 +4,11 @@
 //! a process's part of it, whose own nodes, elements and bodies rank 0 gathers into the whole
 //! model's numbering for the writing and drops after it ([`Simulation::gather`], [`Gathered`]).
 //! A restart on parts goes the other way: every process takes its nodes, elements and bodies
-//! out of the checkpoint's whole state ([`Simulation::set_whole_state`]).
+//! out of the checkpoint's whole state ([`Simulation::set_whole_state`]). When the particles
+//! have moved out of their ghost layers, each process grows its part again from its own state
+//! and what the owners of its new ghosts send it ([`Simulation::regrown`]).
 
-use super::{RunState, SimState, Simulation, Solution};
+use super::{RunState, SimState, Simulation, SolveError, SolverSpec, Solution};
 use crate::assembly::ElementFields;
 use crate::contact::NodalContact;
 use crate::element::N_ENH;
@@ -148,16 +150,6 @@ impl Simulation {
     /// stresses, the equivalent strains, the contact's nodal values): the rest of the state
     /// holds its initial values and must not be checkpointed ([`Gathered::complete`]).
     pub fn gather(&self, complete: bool) -> Option<Gathered> {
-        self.gather_to(false, complete)
-    }
-
-    /// [`Simulation::gather`] (complete) onto every process (each with its own counters and
-    /// timings): to make the parts again from. Collective on a part.
-    pub fn gather_all(&self) -> Gathered {
-        self.gather_to(true, true).expect("an all-gather gives every process the state")
-    }
-
-    fn gather_to(&self, everywhere: bool, complete: bool) -> Option<Gathered> {
         let Some(p) = &self.sys.part else {
             return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned(), complete: true });
         };
@@ -184,12 +176,12 @@ impl Simulation {
         }
         // (every record goes straight into the whole state: the receiver holds it once; the
         // others allocate nothing of it)
-        let receives = everywhere || comm.is_root();
+        let receives = comm.is_root();
         let (nn, ne) = if receives { (whole.n_nodes, whole.n_elements) } else { (0, 0) };
         let (mut u, mut u_prev) = (vec![0.0; 2 * nn], vec![0.0; 2 * nn]);
         let nw = node_bs.saturating_sub(10);
         let mut nodal = with_nodal.then(|| NodalContact { pressure: vec![0.0; nn], shear: vec![0.0; nn], gap: vec![f64::NAN; nn], status: vec![0; nn], force: vec![[0.0; 2]; nn], wall_force: vec![vec![0.0; nn]; nw] });
-        let received = crate::parallel::part::receive_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, everywhere, |n, r| {
+        let received = crate::parallel::part::receive_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, false, |n, r| {
             if n >= nn {
                 return;
             }
@@ -211,13 +203,13 @@ impl Simulation {
             element_record(&self.sol, e, complete, &mut local);
         }
         let mut sol = Solution { time: self.sol.time, u, fields: ElementFields::new(ne), lambda: vec![0.0; ne], j0: vec![1.0; ne] };
-        let got_elements = crate::parallel::part::receive_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * bs..(i + 1) * bs])), bs, everywhere, |e, r| {
+        let got_elements = crate::parallel::part::receive_records(comm, own_elements.iter().enumerate().map(|(i, &e)| (p.whole.element[e], &local[i * bs..(i + 1) * bs])), bs, false, |e, r| {
             if e < ne {
                 put_element_record(r, e, complete, &mut sol);
             }
         });
         drop(local);
-        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, everywhere);
+        let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, false);
         let (true, true, Some(areas)) = (received, got_elements, areas) else { return None };
         let mut state = SimState { scalars: self.scalars(), sol, u_prev, dynamics: None };
         state.scalars.run.area0_body = areas;
@@ -261,5 +253,63 @@ impl Simulation {
         scalars.run.remesh_baseline = baseline;
         let u_prev = pick(&u_prev);
         self.set_state(SimState { scalars, sol: local, u_prev, dynamics })
+    }
+
+    /// On a part: the simulation of this part grown again ([`crate::parallel::part::RankPart::regrow`]),
+    /// with the other processes' bodies within `reach` of its own where they are now as its
+    /// ghosts, at this converged state: its own nodes, elements and bodies keep their values
+    /// and places; the ghosts' displacements come from their owners (the new node map's
+    /// forward scatter), their bodies' reference areas from every process's own (one number a
+    /// body). No process gathers the whole state. It counts as a repartition. Collective on a
+    /// part.
+    ///
+    /// # Errors
+    /// Not a part, a part that cannot be grown again, or what [`Simulation::new_part`] and
+    /// [`Simulation::set_state`] refuse.
+    pub fn regrown(&self, time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64) -> Result<Simulation, String> {
+        use crate::parallel::part::{PartView, RankPart};
+        let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
+        let x = self.coords(&self.sol.u);
+        let view = PartView { model: &self.model, nodes: &p.nodes, bodies: &p.bodies, n_owned_bodies: p.own_bodies, whole: &p.whole, whole_eq: &p.dof_whole_eq, layout: &p.layout };
+        let part = RankPart::regrow(view, &x, reach).map_err(|e| e.to_string())?;
+        let comm = p.nodes.comm();
+        let (own_nodes, own_bodies) = (p.nodes.n_owned(), p.own_bodies);
+        let own_elements = self.model.bodies.get(own_bodies).map_or(self.model.elements.len(), |b| b.elem_offset);
+        let (n_local, ne, nb) = (part.nodes.n_local(), part.model.elements.len(), part.bodies.len());
+        // the displacements: its own, then the ghosts' from their owners
+        let mut uu = vec![0.0; 4 * n_local];
+        for n in 0..own_nodes {
+            uu[4 * n..4 * n + 4].copy_from_slice(&[self.sol.u[2 * n], self.sol.u[2 * n + 1], self.u_prev[2 * n], self.u_prev[2 * n + 1]]);
+        }
+        part.nodes.forward(&mut uu, 4);
+        let (u, u_prev): (Vec<f64>, Vec<f64>) = (uu.chunks_exact(2).step_by(2).flatten().copied().collect(), uu.chunks_exact(2).skip(1).step_by(2).flatten().copied().collect());
+        drop(uu);
+        // the elements: its own as they are; a ghost's are not read (its owner evaluates it)
+        let (f, mut fields) = (&self.sol.fields, ElementFields::new(ne));
+        let own = ..own_elements;
+        fields.states[own].copy_from_slice(&f.states[own]);
+        fields.sig[own].copy_from_slice(&f.sig[own]);
+        fields.pressure[own].copy_from_slice(&f.pressure[own]);
+        fields.theta[own].copy_from_slice(&f.theta[own]);
+        fields.alpha[own].copy_from_slice(&f.alpha[own]);
+        let (mut lambda, mut j0) = (vec![0.0; ne], vec![1.0; ne]);
+        lambda[own].copy_from_slice(&self.sol.lambda[own]);
+        j0[own].copy_from_slice(&self.sol.j0[own]);
+        let sol = Solution { time: self.sol.time, u, fields, lambda, j0 };
+        // the bodies' reference areas: every process's own, to every process
+        let mine: Vec<f64> = (0..own_bodies).flat_map(|b| [p.bodies[b] as f64, self.run.area0_body[b]]).collect();
+        let all = comm.all_gather_varcount(&mine);
+        let mut area = std::collections::HashMap::with_capacity(nb);
+        let wanted: std::collections::HashSet<usize> = part.bodies.iter().copied().collect();
+        for r in all.chunks_exact(2).filter(|r| wanted.contains(&(r[0] as usize))) {
+            area.insert(r[0] as usize, r[1]);
+        }
+        let mut scalars = self.scalars();
+        scalars.run.area0_body = part.bodies.iter().map(|b| area.get(b).copied().unwrap_or(f64::NAN)).collect();
+        scalars.run.remesh_baseline = vec![None; nb];
+        scalars.partition.repartitions += 1;
+        let mut sim = Simulation::new_part(part, time, spec).map_err(|e: SolveError| e.to_string())?;
+        sim.set_state(SimState { scalars, sol, u_prev, dynamics: None })?;
+        Ok(sim)
     }
 }

@@ -63,6 +63,11 @@ pub(super) struct PartSys {
     /// The whole model's equation of each of the part's equations (for what is defined on the
     /// whole model's equations: the saddle's pseudo-random start).
     pub eq_whole: Vec<usize>,
+    /// The whole model's equation of each of the part's dofs ([`crate::assembly::FIXED`]
+    /// for a prescribed one): what a part grown again takes for its own dofs.
+    pub dof_whole_eq: Vec<usize>,
+    /// Every body's owner, size and place in the whole model (to grow the part again).
+    pub layout: Arc<crate::parallel::part::BodyLayout>,
     /// The whole model's node and element of each of the part's nodes and elements (to name
     /// a failed element, to gather the output).
     pub whole: crate::model::PartMap,
