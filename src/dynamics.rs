@@ -236,16 +236,20 @@ impl Dynamics {
     /// F_int += (M a_{n+1}(u) − α g_n) / (1 + α), and, with a tangent (matrix values and the
     /// position of every dof's diagonal entry, none for a constrained dof), their derivative
     /// M / ((1 + α) β Δt²) to the diagonal.
-    pub fn add_inertia(&self, u: &[f64], dt: f64, f_int: &mut [f64], tangent: Option<(&mut [f64], &BlockMap)>) {
+    ///
+    /// `own`: the dofs to add them to, the first (all of them but on a process's part of a
+    /// distributed model, whose ghosts' terms are their owners').
+    pub fn add_inertia(&self, u: &[f64], dt: f64, own: usize, f_int: &mut [f64], tangent: Option<(&mut [f64], &BlockMap)>) {
         let p = self.params;
         let s = 1.0 / (1.0 + p.alpha);
-        for d in 0..self.mass.len() {
+        let own = own.min(self.mass.len());
+        for d in 0..own {
             let acc = self.acceleration(d, u[d], dt);
             f_int[d] += s * (self.mass[d] * acc - p.alpha * self.g[d]);
         }
         if let Some((values, diag)) = tangent {
             let c = s / (p.beta * dt * dt);
-            for d in 0..self.mass.len() {
+            for d in 0..own {
                 if self.mass[d] > 0.0 {
                     diag.add(values, d, &[c * self.mass[d]]);
                 }
@@ -269,12 +273,14 @@ impl Dynamics {
         }
     }
 
-    /// Kinetic energy ½ vᵀ M v of the committed state (N·mm per mm of thickness).
-    pub fn kinetic_energy(&self) -> f64 {
+    /// Kinetic energy ½ vᵀ M v of the committed state (N·mm per mm of thickness), of the
+    /// first `own` dofs (all of them but on a process's part: its own).
+    pub fn kinetic_energy(&self, own: usize) -> f64 {
         0.5 * self
             .mass
             .iter()
             .zip(&self.v)
+            .take(own)
             .map(|(m, v)| m * v * v)
             .sum::<f64>()
     }
@@ -308,13 +314,13 @@ mod tests {
             for _ in 0..2 {
                 kk.values[0] = k;
                 let mut fi = [k * u[0]];
-                dy.add_inertia(&u, dt, &mut fi, Some((&mut kk.values, &diag)));
+                dy.add_inertia(&u, dt, 1, &mut fi, Some((&mut kk.values, &diag)));
                 u[0] += (f - fi[0]) / kk.values[0];
             }
             let mut fi = [k * u[0]];
-            dy.add_inertia(&u, dt, &mut fi, None);
+            dy.add_inertia(&u, dt, 1, &mut fi, None);
             dy.commit(&u, dt, &fi, &[f]);
-            out.push((u[0], dy.kinetic_energy() + 0.5 * k * u[0] * u[0] - f * u[0]));
+            out.push((u[0], dy.kinetic_energy(1) + 0.5 * k * u[0] * u[0] - f * u[0]));
         }
         out
     }

@@ -523,7 +523,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         if let Ok(m) = Model::from_case(&c) {
             let refusal = match m.bodies.len() < comm.size() {
                 true => Some("fewer bodies than processes"),
-                false => Simulation::part_refusal(&m, &c.time),
+                false => Simulation::part_refusal(&m),
             };
             match refusal {
                 None => whole = Some(m),

@@ -192,9 +192,9 @@ impl Simulation {
         Self::build_with(model, time, spec, comm, previous, None)
     }
 
-    /// What of `model` and `time` a distributed part ([`Simulation::new_part`]) does not take
+    /// What of `model` a distributed part ([`Simulation::new_part`]) does not take
     /// yet, None when it takes them all.
-    pub fn part_refusal(model: &Model, time: &TimeSpec) -> Option<&'static str> {
+    pub fn part_refusal(model: &Model) -> Option<&'static str> {
         if !model.has_contact() {
             Some("a model without contact (one body, no walls)")
         } else if model.contact.method != crate::contact::ContactMethod::Barrier {
@@ -203,8 +203,6 @@ impl Simulation {
             Some("cohering particles (the barrier's ties)")
         } else if model.remesh.enabled {
             Some("re-meshing")
-        } else if time.integrator != crate::dynamics::Integrator::Static {
-            Some("implicit dynamics")
         } else {
             None
         }
@@ -217,13 +215,13 @@ impl Simulation {
     /// processes (see [`crate::parallel`]). Every process of the part's map calls this.
     ///
     /// For now a part takes the barrier contact without ties (frictionless or with friction),
-    /// quasi-statics and no re-meshing; anything else is refused by name.
+    /// quasi-statics or implicit dynamics, and no re-meshing; anything else is refused by name.
     ///
     /// # Errors
     /// What the part cannot take (above), or what [`Simulation::new`] refuses.
     pub fn new_part(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
         let model = &part.model;
-        let unsupported = Self::part_refusal(model, &time);
+        let unsupported = Self::part_refusal(model);
         if let Some(what) = unsupported {
             return Err(SolveError::Contact(format!("a distributed part does not take {what} yet")));
         }

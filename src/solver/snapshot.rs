@@ -160,17 +160,27 @@ impl Simulation {
         let nw = nodal.map_or(0, |c| c.wall_force.len());
         // (every process has the nodal values when one has: they are set at every commit)
         let with_nodal = comm.max(if nodal.is_some() { 1.0 } else { 0.0 }) > 0.0;
-        let node_bs = 4 + if with_nodal { 6 + comm.max(nw as f64) as usize } else { 0 };
+        // the implicit dynamics' u, v, a, g (the velocity alone for the output)
+        let dynamic: Vec<&[f64]> = match &self.dynamics {
+            Some(d) if complete => vec![&d.u, &d.v, &d.a, &d.g],
+            Some(d) => vec![&d.v],
+            None => Vec::new(),
+        };
+        let dn = 2 * dynamic.len();
+        let node_bs = 4 + dn + if with_nodal { 6 + comm.max(nw as f64) as usize } else { 0 };
         let mut local = Vec::with_capacity(n_own * node_bs);
         for n in 0..n_own {
             local.extend([self.sol.u[2 * n], self.sol.u[2 * n + 1], self.u_prev[2 * n], self.u_prev[2 * n + 1]]);
+            for v in &dynamic {
+                local.extend_from_slice(&v[2 * n..2 * n + 2]);
+            }
             if with_nodal {
                 match nodal {
                     Some(c) => {
                         local.extend([c.pressure[n], c.shear.get(n).copied().unwrap_or(0.0), c.gap[n], f64::from(c.status[n]), c.force[n][0], c.force[n][1]]);
                         local.extend(c.wall_force.iter().map(|w| w[n]));
                     }
-                    None => local.extend(std::iter::repeat_n(0.0, node_bs - 4)),
+                    None => local.extend(std::iter::repeat_n(0.0, node_bs - 4 - dn)),
                 }
             }
         }
@@ -179,14 +189,20 @@ impl Simulation {
         let receives = comm.is_root();
         let (nn, ne) = if receives { (whole.n_nodes, whole.n_elements) } else { (0, 0) };
         let (mut u, mut u_prev) = (vec![0.0; 2 * nn], vec![0.0; 2 * nn]);
-        let nw = node_bs.saturating_sub(10);
+        let nw = node_bs.saturating_sub(10 + dn);
         let mut nodal = with_nodal.then(|| NodalContact { pressure: vec![0.0; nn], shear: vec![0.0; nn], gap: vec![f64::NAN; nn], status: vec![0; nn], force: vec![[0.0; 2]; nn], wall_force: vec![vec![0.0; nn]; nw] });
+        let mut dynamics = vec![vec![0.0; 2 * nn]; dynamic.len()];
         let received = crate::parallel::part::receive_records(comm, (0..n_own).map(|n| (p.whole.node[n], &local[n * node_bs..(n + 1) * node_bs])), node_bs, false, |n, r| {
             if n >= nn {
                 return;
             }
             u[2 * n..2 * n + 2].copy_from_slice(&r[..2]);
             u_prev[2 * n..2 * n + 2].copy_from_slice(&r[2..4]);
+            for (k, v) in dynamics.iter_mut().enumerate() {
+                v[2 * n..2 * n + 2].copy_from_slice(&r[4 + 2 * k..6 + 2 * k]);
+            }
+            // (the contact's values after the dynamics', at 4.. as without them)
+            let r = &r[dn..];
             if let Some(c) = nodal.as_mut() {
                 (c.pressure[n], c.shear[n], c.gap[n], c.status[n]) = (r[4], r[5], r[6], r[7] as i32);
                 c.force[n] = [r[8], r[9]];
@@ -211,7 +227,12 @@ impl Simulation {
         drop(local);
         let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, false);
         let (true, true, Some(areas)) = (received, got_elements, areas) else { return None };
-        let mut state = SimState { scalars: self.scalars(), sol, u_prev, dynamics: None };
+        // (the output's velocity alone: u, a and g hold zeros, not to be checkpointed)
+        let dynamics = match <[Vec<f64>; 4]>::try_from(dynamics) {
+            Ok(all) => Some(all),
+            Err(mut v) => v.pop().map(|vel| [vec![0.0; 2 * nn], vel, vec![0.0; 2 * nn], vec![0.0; 2 * nn]]),
+        };
+        let mut state = SimState { scalars: self.scalars(), sol, u_prev, dynamics };
         state.scalars.run.area0_body = areas;
         state.scalars.run.remesh_baseline = vec![None; whole.n_bodies];
         Some(Gathered { state, nodal, complete })
@@ -231,8 +252,10 @@ impl Simulation {
         check("previous displacement dofs", whole.u_prev.len(), 2 * w.n_nodes)?;
         check("element multipliers", whole.sol.lambda.len(), w.n_elements)?;
         check("body areas", whole.scalars.run.area0_body.len(), w.n_bodies)?;
-        if whole.dynamics.is_some() {
-            return Err("the checkpoint is of a dynamic analysis, which a distributed part does not take yet".into());
+        if let Some(d) = &whole.dynamics {
+            for (what, v) in ["dynamic displacements", "velocities", "accelerations", "dynamic forces"].iter().zip(d) {
+                check(what, v.len(), 2 * w.n_nodes)?;
+            }
         }
         let nodes = &p.whole.node;
         let elements = &p.whole.element;
@@ -252,6 +275,7 @@ impl Simulation {
         scalars.run.area0_body = area0;
         scalars.run.remesh_baseline = baseline;
         let u_prev = pick(&u_prev);
+        let dynamics = dynamics.map(|d| d.map(|v| pick(&v)));
         self.set_state(SimState { scalars, sol: local, u_prev, dynamics })
     }
 
@@ -276,14 +300,27 @@ impl Simulation {
         let (own_nodes, own_bodies) = (p.nodes.n_owned(), p.own_bodies);
         let own_elements = self.model.bodies.get(own_bodies).map_or(self.model.elements.len(), |b| b.elem_offset);
         let (n_local, ne, nb) = (part.nodes.n_local(), part.model.elements.len(), part.bodies.len());
-        // the displacements: its own, then the ghosts' from their owners
-        let mut uu = vec![0.0; 4 * n_local];
-        for n in 0..own_nodes {
-            uu[4 * n..4 * n + 4].copy_from_slice(&[self.sol.u[2 * n], self.sol.u[2 * n + 1], self.u_prev[2 * n], self.u_prev[2 * n + 1]]);
+        // the nodal vectors (displacements, the dynamics' u, v, a, g): its own, then the
+        // ghosts' from their owners
+        let mut vectors: Vec<&[f64]> = vec![&self.sol.u, &self.u_prev];
+        if let Some(d) = &self.dynamics {
+            vectors.extend([&d.u[..], &d.v, &d.a, &d.g]);
         }
-        part.nodes.forward(&mut uu, 4);
-        let (u, u_prev): (Vec<f64>, Vec<f64>) = (uu.chunks_exact(2).step_by(2).flatten().copied().collect(), uu.chunks_exact(2).skip(1).step_by(2).flatten().copied().collect());
-        drop(uu);
+        let bs = 2 * vectors.len();
+        let mut all = vec![0.0; bs * n_local];
+        for n in 0..own_nodes {
+            for (k, v) in vectors.iter().enumerate() {
+                all[bs * n + 2 * k..bs * n + 2 * k + 2].copy_from_slice(&v[2 * n..2 * n + 2]);
+            }
+        }
+        part.nodes.forward(&mut all, bs);
+        let mut vectors: Vec<Vec<f64>> = (0..vectors.len()).map(|k| all.chunks_exact(bs).flat_map(|r| [r[2 * k], r[2 * k + 1]]).collect()).collect();
+        drop(all);
+        let dynamics = (vectors.len() == 6).then(|| {
+            let d: Vec<Vec<f64>> = vectors.drain(2..).collect();
+            <[Vec<f64>; 4]>::try_from(d).expect("four dynamic vectors")
+        });
+        let (u_prev, u) = (vectors.pop().unwrap_or_default(), vectors.pop().unwrap_or_default());
         // the elements: its own as they are; a ghost's are not read (its owner evaluates it)
         let (f, mut fields) = (&self.sol.fields, ElementFields::new(ne));
         let own = ..own_elements;
@@ -309,7 +346,7 @@ impl Simulation {
         scalars.run.remesh_baseline = vec![None; nb];
         scalars.partition.repartitions += 1;
         let mut sim = Simulation::new_part(part, time, spec).map_err(|e: SolveError| e.to_string())?;
-        sim.set_state(SimState { scalars, sol, u_prev, dynamics: None })?;
+        sim.set_state(SimState { scalars, sol, u_prev, dynamics })?;
         Ok(sim)
     }
 }

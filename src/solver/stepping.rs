@@ -502,7 +502,8 @@ impl Simulation {
             max_element_volume_change: trial.worst,
             reactions,
             displacements,
-            kinetic_energy: self.dynamics.as_ref().map_or(0.0, |dy| dy.kinetic_energy()),
+            // (a part: its own dofs', summed over the processes)
+            kinetic_energy: self.dynamics.as_ref().map_or(0.0, |dy| self.sys.sum(dy.kinetic_energy(self.sys.own_dofs()))),
             remeshes: 0,
         }
     }

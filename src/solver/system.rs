@@ -347,7 +347,8 @@ impl Simulation {
         // implicit dynamics: inertia (HHT-weighted) in F_int, M/((1+α)βΔt²) on the diagonal
         if let Some(dy) = self.dynamics.as_ref() {
             let sys = &mut self.sys;
-            dy.add_inertia(u, inc.dt, &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
+            // (a part: its own dofs; the ghosts' inertia is their owners')
+            dy.add_inertia(u, inc.dt, sys.own_dofs(), &mut sys.f_int, root_tangent.then_some((&mut sys.kk.values[..], &sys.maps.diagonal)));
         }
         let sys = &mut self.sys;
         if let Some(p) = &sys.part {
