@@ -9,6 +9,12 @@
 //!
 //! The same with Coulomb friction 0.2 between the discs, to 1e-7 (see [`FRICTION_TOL`]).
 //!
+//! The same cohering (`contact = "cohering"`: discs that touch are tied from then on, 36 tied
+//! nodes at the end), with every part grown again twice mid-run, after the ties are made
+//! (`Simulation::regrown`: its ties go to the new numbering of its ghosts' edges): the number of
+//! ties and their largest gap are the same just before and after, and the history equals the
+//! whole serial run's to 1e-8.
+//!
 //! Reference: the same case run whole and serially (faer) on every process. Checked at every
 //! step: the same step sizes, and the wall forces, pressures and the solid ratio equal to
 //! 1e-8 relative of the largest value of their column (the tolerance for the
@@ -61,8 +67,55 @@ fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
     let friction = case.replace("[contact]\ncontact = \"sliding\"\n", "[contact]\ncontact = \"rubbing\"\nfriction = 0.2\n");
     assert_ne!(friction, case);
     let frictionless = compare(comm.clone(), &case, FRICTIONLESS_TOL, true);
-    let rubbing = compare(comm, &friction, FRICTION_TOL, false);
-    format!("{frictionless}; with friction 0.2: {rubbing}")
+    let rubbing = compare(comm.clone(), &friction, FRICTION_TOL, false);
+    let cohering = case.replace("contact = \"sliding\"", "contact = \"cohering\"");
+    assert_ne!(cohering, case);
+    let tied = cohering_grown_again(comm, &cohering);
+    format!("{frictionless}; with friction 0.2: {rubbing}; cohering, grown again: {tied}")
+}
+
+/// The cohering run on parts grown again after steps 4 and 6 (ghosts within the least reach
+/// the steps need, then every disc) against the whole serial run, to [`FRICTIONLESS_TOL`].
+fn cohering_grown_again(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
+    use std::ops::ControlFlow;
+    let (rank, size) = (comm.rank(), comm.size());
+    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    let serial = run(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
+    let reach = 0.25 * 100.0 / 3.0;
+    let part = RankPart::for_run(&whole, &whole.x0, reach, comm.clone()).expect("part");
+    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let mut rows = Vec::new();
+    let mut ties = Vec::new();
+    // (first the least reach the steps need, then one past the grid's far side: on 3 and 4
+    // ranks the second brings new ghosts before the old ones, whose edges are numbered anew)
+    let least = whole.barrier_contact().expect("the barrier").dhat + 2.0 * whole.whole_facts().h_min;
+    for (stop, again) in [(4, least), (6, 40.0), (usize::MAX, 0.0)] {
+        sim.run_controlled(&mut |_, r| {
+            rows.push(row(r));
+            if r.step == stop { ControlFlow::Break("grow the parts again".into()) } else { ControlFlow::Continue(()) }
+        })
+        .expect("the run goes on");
+        if stop == usize::MAX {
+            break;
+        }
+        let before = sim.barrier_ties().expect("the barrier");
+        sim = sim.regrown(case.time.clone(), case.solver.clone(), again).expect("the parts grown again");
+        let after = sim.barrier_ties().expect("the barrier");
+        assert_eq!(before, after, "rank {rank}: the ties (count, largest gap) grown again at step {stop}");
+        ties.push(after.0);
+    }
+    assert!(ties.iter().all(|&n| n > 0), "rank {rank}: no ties when the parts were grown again ({ties:?}): the case no longer tests it");
+    assert_eq!(rows.len(), serial.len(), "rank {rank}: {} steps on the parts, {} whole", rows.len(), serial.len());
+    let mut worst = 0.0f64;
+    for c in 0..serial[0].len() {
+        let scale = serial.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(1e-300);
+        for (a, b) in rows.iter().zip(&serial) {
+            worst = worst.max((a[c] - b[c]).abs() / scale);
+        }
+    }
+    assert!(worst <= FRICTIONLESS_TOL, "rank {rank} of {size}: the cohering parts grown again differ from the whole run by {worst:e}");
+    format!("ties {ties:?} when grown again, largest difference {worst:.1e}")
 }
 
 /// The tolerance of the frictionless case: the for the distributed direct solver.

@@ -34,6 +34,11 @@
 //!   loose 3 × 3 grid, whose parts are grown again mid-run carrying the dynamics to the new
 //!   ghosts, to the same tolerances.
 //!
+//! - Cohering discs (`contact = "cohering"`: 36 nodes tied from step 4): 2 ranks against the
+//!   serial run (history and `results.h5` from step 2, the tied status included, 1e-8; the
+//!   volume errors 1e-10 absolute), and the 2-rank checkpoint (its ties gathered into the
+//!   whole model's numbering of nodes and edges) continued on 3 ranks, and the serial one on 2.
+//!
 //! Needs Open MPI's `mpirun` and PETSc (`scripts/setup.sh` installs both).
 #![cfg(feature = "petsc")]
 
@@ -116,6 +121,10 @@ fn results_difference(reference: &Path, other: &Path) -> (f64, usize) {
     let (sa, sb) = (fa.group("steps").expect("/steps"), fb.group("steps").expect("/steps"));
     let steps = sa.member_names().expect("steps");
     assert_eq!(steps, sb.member_names().expect("steps"), "output steps");
+    // every step's Δt (the reference's history)
+    let (h, rows) = read_csv(&reference.join("history.csv"));
+    let col = h.iter().position(|c| c == "dt").expect("a dt column");
+    let dts: Vec<f64> = rows.iter().map(|r| r[col]).collect();
     assert!(steps.len() >= 3, "only {} output steps", steps.len());
     let (mut worst, mut n) = (0.0f64, 0);
     for s in &steps {
@@ -123,14 +132,27 @@ fn results_difference(reference: &Path, other: &Path) -> (f64, usize) {
         let names = ga.member_names().expect("datasets");
         assert_eq!(names, gb.member_names().expect("datasets"), "step {s}: datasets");
         // (the shear traction is compared on the scale of the pressure: where the contact
-        // is frictionless it is round-off of the pressure's size)
-        let pressure: Vec<f64> = ga.dataset("contact_pressure").and_then(|d| d.read_raw()).unwrap_or_default();
-        let pressure = pressure.iter().filter(|v| v.is_finite()).fold(1e-300f64, |m, v| m.max(v.abs()));
+        // is frictionless it is round-off of the pressure's size; the velocity, the step's
+        // increment over its Δt, on the scale of the displacement over Δt: the last step,
+        // shortened to land on the target, has a Δt a hundred times below the others)
+        let largest = |name: &str| -> f64 {
+            let v: Vec<f64> = ga.dataset(name).and_then(|d| d.read_raw()).unwrap_or_default();
+            v.iter().filter(|v| v.is_finite()).fold(1e-300f64, |m, v| m.max(v.abs()))
+        };
+        let pressure = largest("contact_pressure");
+        let step: usize = s.parse().expect("a step number");
+        let dt = dts.get(step.wrapping_sub(1)).copied().unwrap_or(f64::INFINITY);
+        let velocity = largest("displacement") / dt;
         for d in &names {
             let (da, db) = (ga.dataset(d).expect("dataset"), gb.dataset(d).expect("dataset"));
             assert_eq!(da.shape(), db.shape(), "step {s}: {d}: shape");
             let (a, b): (Vec<f64>, Vec<f64>) = (da.read_raw().expect("numbers"), db.read_raw().expect("numbers"));
-            let diff = relative_at_least(&a, &b, if d == "contact_shear" { pressure } else { 1e-300 });
+            let floor = match d.as_str() {
+                "contact_shear" => pressure,
+                "velocity" => velocity,
+                _ => 1e-300,
+            };
+            let diff = relative_at_least(&a, &b, floor);
             assert!(diff <= TOL, "results.h5 step {s}: {d} differs by {diff:.2e} > {TOL:e}");
             worst = worst.max(diff);
             n += 1;
@@ -286,5 +308,36 @@ fn implicit_dynamics_on_parts_follows_the_serial_run() {
     let remade = made_again_to_target(&two, "dynamic 3 x 3");
     let worst = history_difference_but(&serial, &two, "dynamic parts grown again", &VOLUMES);
     println!("dynamic loose 3 x 3 on 2 ranks, parts grown again {remade} times: history {worst:.2e} from the serial run");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn cohering_parts_write_and_restart_their_ties() {
+    let dir = tmpdir("cohering");
+    let edit = |t: String| t.replace("contact = \"sliding\"", "contact = \"cohering\"").replace("[output]\nevery = 0", "[output]\nevery = 2\ncheckpoint_every = 5\ncheckpoint_minutes = 0");
+    let (serial_case, parts_case) = serial_and_parts(&dir, edit, &["contact = \"cohering\"", "every = 2"]);
+    let serial = dir.join("serial");
+    run(&serial_case, None, &serial, &["--quiet"]);
+    let two = dir.join("two");
+    run(&parts_case, Some(2), &two, &["--quiet"]);
+    let worst = history_difference_but(&serial, &two, "cohering on 2 ranks", &VOLUMES);
+    let (results, n) = results_difference(&serial, &two);
+    let file = hdf5::File::open(two.join("results.h5")).expect("results.h5");
+    let steps = file.group("steps").expect("/steps");
+    let last = steps.member_names().expect("steps").pop().expect("a step");
+    let status: Vec<f64> = steps.group(&last).and_then(|g| g.dataset("contact_status")).and_then(|d| d.read_raw()).expect("contact_status");
+    let tied = status.iter().filter(|&&s| s == 3.0).count();
+    assert!(tied > 0, "no tied node at the last step: the case no longer tests the ties");
+    println!("cohering on 2 ranks: {tied} tied nodes, history {worst:.2e}, results.h5 {results:.2e} over {n} datasets");
+    // the 2-rank checkpoint (step 5 of 8, ties in the whole model's numbering) on 3 ranks
+    let three = dir.join("three");
+    stopped_at(&two, &three, 5);
+    run(&parts_case, Some(3), &three, &["--quiet", "--restart", three.to_str().unwrap()]);
+    let worst = history_difference_but(&serial, &three, "the cohering 2-rank checkpoint on 3", &VOLUMES);
+    let from_serial = dir.join("from-serial");
+    stopped_at(&serial, &from_serial, 5);
+    run(&parts_case, Some(2), &from_serial, &["--quiet", "--allow-case-change", "--restart", from_serial.to_str().unwrap()]);
+    let worst_serial = history_difference_but(&serial, &from_serial, "the cohering serial checkpoint on 2 ranks", &VOLUMES);
+    println!("cohering checkpoints continued: 2 ranks' on 3 {worst:.2e}, the serial one on 2 {worst_serial:.2e}");
     let _ = std::fs::remove_dir_all(&dir);
 }

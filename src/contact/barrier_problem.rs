@@ -740,11 +740,16 @@ impl BarrierContact {
     /// edge of that particle, at `x`. With `eval`, the evaluation of the barrier at `x`, a new
     /// tie takes over the barrier's force on its node as its multiplier, so that the state
     /// stays in balance. Returns how many ties were made.
+    ///
+    /// With [`BarrierContact::evaluate_only`] only the nodes of those bodies are tied: a
+    /// process of a distributed run makes (and evaluates) the ties of its own particles'
+    /// nodes, to edges of its own particles or of its ghosts.
     pub fn tie_close(&mut self, x: &[[f64; 2]], eval: Option<&BarrierEval>) -> usize {
         self.search.update(x);
         // the closest edge of every (node, other particle) within d̂
         let mut best: std::collections::BTreeMap<(usize, usize), (usize, f64)> = std::collections::BTreeMap::new();
-        for (node, s) in self.search.pairs(x, &self.nodes, self.dhat) {
+        let nodes = if self.first_sides.is_empty() { &self.nodes } else { &self.first_nodes };
+        for (node, s) in self.search.pairs(x, nodes, self.dhat) {
             let seg = self.segments[s];
             if self.is_tied(node, seg.body) {
                 continue;

@@ -84,6 +84,9 @@ pub struct BodyLayout {
     /// The whole model's node and element of each body's first.
     pub node_offset: Vec<usize>,
     pub elem_offset: Vec<usize>,
+    /// The whole model's boundary edge of each body's first (the contact's segments: every
+    /// body's `mesh.boundary` in body order), and one past the last body's.
+    pub segment_offset: Vec<usize>,
 }
 
 impl BodyLayout {
@@ -95,7 +98,19 @@ impl BodyLayout {
             n_nodes: b.iter().map(|b| b.mesh.n_nodes()).collect(),
             node_offset: b.iter().map(|b| b.node_offset).collect(),
             elem_offset: b.iter().map(|b| b.elem_offset).collect(),
+            segment_offset: std::iter::once(0)
+                .chain(b.iter().scan(0, |at, b| {
+                    *at += b.mesh.boundary.len();
+                    Some(*at)
+                }))
+                .collect(),
         }
+    }
+
+    /// The body whose boundary holds the whole model's boundary edge `w` (None past the last).
+    pub fn segment_body(&self, w: usize) -> Option<usize> {
+        let b = self.segment_offset.partition_point(|&o| o <= w);
+        (b >= 1 && b < self.segment_offset.len()).then(|| b - 1)
     }
 }
 

@@ -94,6 +94,9 @@ pub(super) struct BarrierRun {
     pub tie_floor: f64,
     /// The largest tie gap after the last multiplier update of this step (mm).
     pub tie_gap: f64,
+    /// How many ties hold in the whole model (on a part: over every process; its own are
+    /// `contact.ties`).
+    pub n_ties: usize,
     /// Forces below this are round-off: 1e-13 K L with K the largest shear modulus or bulk
     /// penalty (incompressible particles) and L the square root of the particles' area (N/mm).
     pub stiffness_floor: f64,
@@ -163,12 +166,14 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true }
     }
 
-    /// The round-off of the ties' forces, after ties were made.
-    pub fn update_tie_floor(&mut self) {
-        self.tie_floor = 8.0 * f64::EPSILON * self.tie_stiffness * self.extent * (self.contact.ties.len() as f64).sqrt();
+    /// The round-off of the ties' forces, after ties were made: `n_ties` of them in the whole
+    /// model.
+    pub fn update_tie_floor(&mut self, n_ties: usize) {
+        self.n_ties = n_ties;
+        self.tie_floor = 8.0 * f64::EPSILON * self.tie_stiffness * self.extent * (n_ties as f64).sqrt();
     }
 
     /// The pairs the pattern needs besides the barrier's: the ties', sorted into `pairs`.
@@ -580,15 +585,17 @@ impl Simulation {
     /// tied 2 × 2 discs (measured). There the ties stay penalties of 100 E for the step, with a
     /// gap of at most ~1e-4 h, and the solve is not repeated for nothing.
     pub(super) fn update_barrier_ties(&mut self, u: &[f64], updates: usize) -> bool {
-        if !self.barrier.as_ref().is_some_and(|b| !b.contact.ties.is_empty()) {
+        // (on a part every process decides alike: from the whole model's ties and their gaps)
+        if !self.barrier.as_ref().is_some_and(|b| b.n_ties > 0) {
             return false;
         }
         let x = self.coords(u);
-        let Some(b) = self.barrier.as_mut() else { return false };
-        let k = b.tie_stiffness;
+        let Some(b) = self.barrier.as_ref() else { return false };
         let segments = &b.contact.segments;
         let gaps: Vec<[f64; 2]> = b.contact.ties.iter().map(|t| t.gap(&x, segments)).collect();
-        let worst = gaps.iter().map(|g| g[0].hypot(g[1])).fold(0.0, f64::max);
+        let worst = self.sys.max(gaps.iter().map(|g| g[0].hypot(g[1])).fold(0.0, f64::max));
+        let Some(b) = self.barrier.as_mut() else { return false };
+        let k = b.tie_stiffness;
         if worst <= TIE_TOL * b.h_min {
             return false;
         }
@@ -970,7 +977,8 @@ impl Simulation {
         b.contact.ties = state.ties;
         b.contact.tied = state.tied;
         b.descent = state.descent;
-        b.update_tie_floor();
+        let n_ties = self.sys.sum(b.contact.ties.len() as f64) as usize;
+        b.update_tie_floor(n_ties);
         b.walls0.clone_from(&walls);
         b.walls1 = walls;
         b.alpha = 1.0;
@@ -1003,10 +1011,11 @@ impl Simulation {
             t.lambda0 = t.lambda;
         }
         if b.tie_stiffness > 0.0 {
-            let made = b.contact.tie_close(&x, Some(&b.eval));
+            // (a part ties its own nodes: the whole model's new ties are every process's)
+            let made = self.sys.sum(b.contact.tie_close(&x, Some(&b.eval)) as f64) as usize;
             if made > 0 {
-                b.update_tie_floor();
-                tracing::debug!(made, ties = b.contact.ties.len(), "particles tied");
+                b.update_tie_floor(b.n_ties + made);
+                tracing::debug!(made, ties = b.n_ties, "particles tied");
             }
         }
         let d = b.eval.min_distance;

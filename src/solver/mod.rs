@@ -199,8 +199,6 @@ impl Simulation {
             Some("a model without contact (one body, no walls)")
         } else if model.contact.method != crate::contact::ContactMethod::Barrier {
             Some("a contact method other than the barrier")
-        } else if matches!(model.contact.kind, crate::contact::ContactKind::Cohering) {
-            Some("cohering particles (the barrier's ties)")
         } else if model.remesh.enabled {
             Some("re-meshing")
         } else {
@@ -214,7 +212,7 @@ impl Simulation {
     /// barrier pairs whose first side is on one of them, and solves with PETSc over the
     /// processes (see [`crate::parallel`]). Every process of the part's map calls this.
     ///
-    /// For now a part takes the barrier contact without ties (frictionless or with friction),
+    /// For now a part takes the barrier contact (frictionless, with friction or cohering),
     /// quasi-statics or implicit dynamics, and no re-meshing; anything else is refused by name.
     ///
     /// # Errors
@@ -287,8 +285,12 @@ impl Simulation {
             // cohering particles that touch (or nearly) at the start are tied at once
             if tie_stiffness > 0.0 {
                 b.extent = whole.extent;
-                b.contact.tie_close(&model.x0, None);
-                b.update_tie_floor();
+                let mut n = [b.contact.tie_close(&model.x0, None) as f64];
+                if part.is_some() {
+                    // (a part ties its own nodes: the whole model's ties are every process's)
+                    comm.sum_in_place(&mut n);
+                }
+                b.update_tie_floor(n[0] as usize);
             }
             // the pattern of the pairs within d̂ + h of the reference configuration
             let near = b.contact.candidates(&model.x0, b.contact.dhat + h);
@@ -692,11 +694,12 @@ impl Simulation {
     /// With the barrier's ties (cohering particles): how many ties hold, and the largest gap
     /// of a tie in the committed state (mm; see [`crate::contact::barrier_problem::Tie`]).
     /// None without the barrier.
+    /// On a part: over every process (collective).
     pub fn barrier_ties(&self) -> Option<(usize, f64)> {
         let b = self.barrier.as_ref()?;
         let x = self.coords(&self.sol.u);
         let gap = b.contact.ties.iter().map(|t| t.gap(&x, &b.contact.segments)).map(|g| g[0].hypot(g[1])).fold(0.0, f64::max);
-        Some((b.contact.ties.len(), gap))
+        Some((self.sys.sum(b.contact.ties.len() as f64) as usize, self.sys.max(gap)))
     }
 
     /// With the barrier: how many boundary nodes of the committed state lie inside another

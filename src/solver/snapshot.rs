@@ -9,6 +9,7 @@
 //! and what the owners of its new ghosts send it ([`Simulation::regrown`]).
 
 use super::{RunState, SimState, Simulation, SolveError, SolverSpec, Solution};
+use crate::contact::barrier_problem::Tie;
 use crate::assembly::ElementFields;
 use crate::contact::NodalContact;
 use crate::element::N_ENH;
@@ -226,6 +227,25 @@ impl Simulation {
         });
         drop(local);
         let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, false);
+        // the ties (cohering particles) in the whole model's numbering, every process's own
+        let ties = self.barrier.as_ref().filter(|b| complete && b.tie_stiffness > 0.0).map(|_| {
+            let (ties, tied) = self.whole_ties();
+            let mut local: Vec<f64> = ties.iter().flat_map(|t| [t.node as f64, t.segment as f64, t.dofs[2] as f64 / 2.0, t.dofs[4] as f64 / 2.0, t.xi, t.offset[0], t.offset[1], t.lambda[0], t.lambda[1], t.lambda0[0], t.lambda0[1]]).collect();
+            let all = comm.gather_varcount_to_root(&local);
+            local = tied.iter().flat_map(|&(n, b)| [n as f64, b as f64]).collect();
+            let all_tied = comm.gather_varcount_to_root(&local);
+            let mut ties: Vec<Tie> = all
+                .chunks_exact(11)
+                .map(|r| {
+                    let [n, a, b] = [r[0], r[2], r[3]].map(|v| v as usize);
+                    Tie { node: n, segment: r[1] as usize, dofs: [2 * n, 2 * n + 1, 2 * a, 2 * a + 1, 2 * b, 2 * b + 1], xi: r[4], offset: [r[5], r[6]], lambda: [r[7], r[8]], lambda0: [r[9], r[10]] }
+                })
+                .collect();
+            ties.sort_by_key(|t| (t.node, t.segment));
+            let mut tied: Vec<(usize, usize)> = all_tied.chunks_exact(2).map(|r| (r[0] as usize, r[1] as usize)).collect();
+            tied.sort_unstable();
+            (ties, tied)
+        });
         let (true, true, Some(areas)) = (received, got_elements, areas) else { return None };
         // (the output's velocity alone: u, a and g hold zeros, not to be checkpointed)
         let dynamics = match <[Vec<f64>; 4]>::try_from(dynamics) {
@@ -233,6 +253,9 @@ impl Simulation {
             Err(mut v) => v.pop().map(|vel| [vec![0.0; 2 * nn], vel, vec![0.0; 2 * nn], vec![0.0; 2 * nn]]),
         };
         let mut state = SimState { scalars: self.scalars(), sol, u_prev, dynamics };
+        if let (Some(b), Some((ties, tied))) = (state.scalars.barrier.as_mut(), ties) {
+            (b.ties, b.tied) = (ties, tied);
+        }
         state.scalars.run.area0_body = areas;
         state.scalars.run.remesh_baseline = vec![None; whole.n_bodies];
         Some(Gathered { state, nodal, complete })
@@ -276,6 +299,15 @@ impl Simulation {
         scalars.run.remesh_baseline = baseline;
         let u_prev = pick(&u_prev);
         let dynamics = dynamics.map(|d| d.map(|v| pick(&v)));
+        if let Some(b) = scalars.barrier.as_mut() {
+            // (every process learns whether one could not take its ties, before the
+            // collective calls of the state's restore)
+            let ties = self.local_ties(&b.ties, &b.tied);
+            if self.sys.any(ties.is_err()) {
+                return Err(ties.err().unwrap_or_else(|| "barrier ties: another process's do not fit its part".into()));
+            }
+            (b.ties, b.tied) = ties?;
+        }
         self.set_state(SimState { scalars, sol: local, u_prev, dynamics })
     }
 
@@ -345,8 +377,75 @@ impl Simulation {
         scalars.run.area0_body = part.bodies.iter().map(|b| area.get(b).copied().unwrap_or(f64::NAN)).collect();
         scalars.run.remesh_baseline = vec![None; nb];
         scalars.partition.repartitions += 1;
+        let whole_ties = self.whole_ties();
         let mut sim = Simulation::new_part(part, time, spec).map_err(|e: SolveError| e.to_string())?;
+        // its ties (on its own nodes) in the new part's numbering of the edges and bodies
+        if let Some(b) = scalars.barrier.as_mut() {
+            let ties = sim.local_ties(&whole_ties.0, &whole_ties.1);
+            if sim.sys.any(ties.is_err()) {
+                return Err(ties.err().unwrap_or_else(|| "barrier ties: another process's do not fit its new part".into()));
+            }
+            (b.ties, b.tied) = ties?;
+        }
         sim.set_state(SimState { scalars, sol, u_prev, dynamics })?;
         Ok(sim)
     }
+
+    /// On a part: its ties (cohering particles: on its own nodes) and its (node, particle)
+    /// pairs held by them, in the whole model's numbering of the nodes, boundary edges and
+    /// bodies (the tie's dofs too). Empty without ties or without a part.
+    fn whole_ties(&self) -> (Vec<Tie>, Vec<(usize, usize)>) {
+        let (Some(p), Some(b)) = (&self.sys.part, &self.barrier) else { return (Vec::new(), Vec::new()) };
+        let segments = &b.contact.segments;
+        let first = first_segments(segments, self.model.bodies.len());
+        let node = |n: usize| p.whole.node[n];
+        let ties = b
+            .contact
+            .ties
+            .iter()
+            .map(|t| {
+                let s = &segments[t.segment];
+                let w = p.layout.segment_offset[p.bodies[s.body]] + t.segment - first[s.body];
+                let [n, a, c] = [t.node, s.nodes[0], s.nodes[1]].map(node);
+                Tie { node: n, segment: w, dofs: [2 * n, 2 * n + 1, 2 * a, 2 * a + 1, 2 * c, 2 * c + 1], ..*t }
+            })
+            .collect();
+        let tied = b.contact.tied.iter().map(|&(n, k)| (node(n), p.bodies[k])).collect();
+        (ties, tied)
+    }
+
+    /// The ties of the whole model's `ties` and `tied` (its numbering, [`Self::whole_ties`])
+    /// on this part's own nodes, in its numbering. Without a part: as they are.
+    ///
+    /// # Errors
+    /// A tie whose edge is not on one of the part's bodies, or out of the whole model's range.
+    fn local_ties(&self, ties: &[Tie], tied: &[(usize, usize)]) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String> {
+        let (Some(p), Some(b)) = (&self.sys.part, &self.barrier) else { return Ok((ties.to_vec(), tied.to_vec())) };
+        let segments = &b.contact.segments;
+        let first = first_segments(segments, self.model.bodies.len());
+        let own: std::collections::HashMap<usize, usize> = p.whole.node[..p.nodes.n_owned()].iter().enumerate().map(|(i, &g)| (g, i)).collect();
+        let local_body: std::collections::HashMap<usize, usize> = p.bodies.iter().enumerate().map(|(k, &g)| (g, k)).collect();
+        let mut out = Vec::new();
+        for t in ties {
+            let Some(&n) = own.get(&t.node) else { continue };
+            let body = p.layout.segment_body(t.segment).ok_or_else(|| format!("barrier ties: edge {} is not in the model", t.segment))?;
+            let k = *local_body.get(&body).ok_or_else(|| format!("barrier ties: node {} is tied to body {body}, which is not within the ghost layer of process {}", t.node, p.nodes.comm().rank()))?;
+            let s = first[k] + t.segment - p.layout.segment_offset[body];
+            let [a, c] = segments[s].nodes;
+            out.push(Tie { node: n, segment: s, dofs: [2 * n, 2 * n + 1, 2 * a, 2 * a + 1, 2 * c, 2 * c + 1], ..*t });
+        }
+        let mut held: Vec<(usize, usize)> = tied.iter().filter_map(|&(n, g)| Some((*own.get(&n)?, *local_body.get(&g)?))).collect();
+        held.sort_unstable();
+        Ok((out, held))
+    }
+}
+
+/// The first of `segments` (the contact's boundary edges, body by body) of each of `n_bodies`
+/// bodies.
+fn first_segments(segments: &[crate::contact::Segment], n_bodies: usize) -> Vec<usize> {
+    let mut first = vec![segments.len(); n_bodies];
+    for (s, seg) in segments.iter().enumerate().rev() {
+        first[seg.body] = s;
+    }
+    first
 }
