@@ -55,6 +55,20 @@ fn row(r: &StepReport) -> Vec<f64> {
     v
 }
 
+/// The largest difference of the parts' rows from the whole run's, relative to the largest
+/// |value| of each column; asserts the same number of steps.
+fn worst_difference(parts: &[Vec<f64>], serial: &[Vec<f64>], rank: usize) -> f64 {
+    assert_eq!(parts.len(), serial.len(), "rank {rank}: {} steps on the parts, {} whole", parts.len(), serial.len());
+    let mut worst = 0.0f64;
+    for c in 0..serial[0].len() {
+        let scale = serial.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(1e-300);
+        for (a, b) in parts.iter().zip(serial) {
+            worst = worst.max((a[c] - b[c]).abs() / scale);
+        }
+    }
+    worst
+}
+
 fn run(sim: &mut Simulation) -> Vec<Vec<f64>> {
     let mut rows = Vec::new();
     sim.run(&mut |_, r| rows.push(row(r))).expect("the run completes");
@@ -106,14 +120,7 @@ fn cohering_grown_again(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, t
         ties.push(after.0);
     }
     assert!(ties.iter().all(|&n| n > 0), "rank {rank}: no ties when the parts were grown again ({ties:?}): the case no longer tests it");
-    assert_eq!(rows.len(), serial.len(), "rank {rank}: {} steps on the parts, {} whole", rows.len(), serial.len());
-    let mut worst = 0.0f64;
-    for c in 0..serial[0].len() {
-        let scale = serial.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(1e-300);
-        for (a, b) in rows.iter().zip(&serial) {
-            worst = worst.max((a[c] - b[c]).abs() / scale);
-        }
-    }
+    let worst = worst_difference(&rows, &serial, rank);
     assert!(worst <= FRICTIONLESS_TOL, "rank {rank} of {size}: the cohering parts grown again differ from the whole run by {worst:e}");
     format!("ties {ties:?} when grown again, largest difference {worst:.1e}")
 }
@@ -148,14 +155,7 @@ fn compare(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str, to
             eprintln!("DEBUG parts {a:?}\nDEBUG whole {b:?}");
         }
     }
-    assert_eq!(parts.len(), serial.len(), "rank {rank}: {} steps on the parts, {} whole", parts.len(), serial.len());
-    let mut worst = 0.0f64;
-    for c in 0..serial[0].len() {
-        let scale = serial.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(1e-300);
-        for (a, b) in parts.iter().zip(&serial) {
-            worst = worst.max((a[c] - b[c]).abs() / scale);
-        }
-    }
+    let worst = worst_difference(&parts, &serial, rank);
     assert!(worst <= tol, "rank {rank} of {size}: the parts' history differs from the whole run's by {worst:e} (relative; tolerance {tol:e})");
     // ghosts chosen too close (boxes that overlap only: none here) miss the pairs across the
     // processes: the run stops, naming a body that came within reach and is not a ghost
