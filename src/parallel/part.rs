@@ -37,6 +37,24 @@ pub fn ghost_bodies(boxes: &[partition::Particle], owner: &[usize], rank: usize,
     Ok(ghost.iter().enumerate().filter_map(|(b, &g)| g.then_some(b)).collect())
 }
 
+/// Every body's box (of the `n` bodies of the whole model), from every process's own bodies'
+/// `(body, box)`, on every process, and whether each was sent (a body no process sent keeps an
+/// empty box of no elements). Collective: five numbers a body.
+pub fn all_boxes(comm: &dyn Collective, own: impl Iterator<Item = (usize, partition::Particle)>, n: usize) -> (Vec<partition::Particle>, Vec<bool>) {
+    let mine: Vec<f64> = own.flat_map(|(g, b)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect();
+    let all = comm.all_gather_varcount(&mine);
+    let mut boxes = vec![partition::Particle { elements: 0, min: [0.0; 2], max: [0.0; 2] }; n];
+    let mut known = vec![false; n];
+    for r in all.chunks_exact(5) {
+        let b = r[0] as usize;
+        if b < n {
+            boxes[b] = partition::Particle { elements: 1, min: [r[1], r[2]], max: [r[3], r[4]] };
+            known[b] = true;
+        }
+    }
+    (boxes, known)
+}
+
 /// The global node numbering of a distributed run: one contiguous range per process in rank
 /// order, each process's bodies in ascending order, each body's nodes in its mesh's order.
 /// Built from the owners and the node count of every body (a few numbers per body, which every
@@ -248,18 +266,8 @@ impl RankPart {
         let n_own = part.n_owned_bodies;
         let mut problem = (x.len() != part.model.n_nodes()).then(|| format!("{} coordinates for the part's {} nodes", x.len(), part.model.n_nodes()));
         // every process's own bodies' boxes, to every process
-        let mine: Vec<f64> = match problem {
-            Some(_) => Vec::new(),
-            None => crate::distribute::particles_at(part.model, x).iter().zip(part.bodies).take(n_own).flat_map(|(b, &g)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect(),
-        };
-        let all = comm.all_gather_varcount(&mine);
-        let mut boxes = vec![partition::Particle { elements: 1, min: [0.0; 2], max: [0.0; 2] }; nb];
-        for r in all.chunks_exact(5) {
-            if let Some(b) = boxes.get_mut(r[0] as usize) {
-                (b.min, b.max) = ([r[1], r[2]], [r[3], r[4]]);
-            }
-        }
-        drop(all);
+        let own = if problem.is_none() { crate::distribute::particles_at(part.model, x) } else { Vec::new() };
+        let (boxes, _) = all_boxes(&*comm, part.bodies.iter().copied().zip(own).take(n_own), nb);
         let ghosts = ghost_bodies(&boxes, &layout.owner, rank, reach)?;
         drop(boxes);
         // the new ghosts this process does not hold, asked of their owners
@@ -485,8 +493,8 @@ fn read_indices<const K: usize>(at: &mut &[f64], below: usize) -> Result<Vec<[us
     v.chunks_exact(K)
         .map(|c| {
             let mut r = [0; K];
-            for (r, &x) in r.iter_mut().zip(c) {
-                *r = read_usize(&mut &[x][..])?;
+            for (r, x) in r.iter_mut().zip(c.chunks(1)) {
+                *r = read_usize(&mut &x[..])?;
                 if *r >= below {
                     return Err(format!("index {r} of {below}"));
                 }

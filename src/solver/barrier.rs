@@ -314,18 +314,8 @@ impl Simulation {
                 a.max = [a.max[0].max(b.max[0]), a.max[1].max(b.max[1])];
             }
         }
-        let mine: Vec<f64> = at.iter().zip(&p.bodies).take(p.own_bodies).flat_map(|(b, &g)| [g as f64, b.min[0], b.min[1], b.max[0], b.max[1]]).collect();
-        let all = self.sys.comm.all_gather_varcount(&mine);
         let n = self.model.whole_facts().n_bodies;
-        let mut boxes = vec![partition::Particle { elements: 0, min: [0.0; 2], max: [0.0; 2] }; n];
-        let mut known = vec![false; n];
-        for r in all.chunks_exact(5) {
-            let b = r[0] as usize;
-            if b < n {
-                boxes[b] = partition::Particle { elements: 1, min: [r[1], r[2]], max: [r[3], r[4]] };
-                known[b] = true;
-            }
-        }
+        let (boxes, known) = crate::parallel::part::all_boxes(&*self.sys.comm, p.bodies.iter().copied().zip(at).take(p.own_bodies), n);
         let mut local = vec![false; n];
         for &g in &p.bodies {
             local[g] = true;

@@ -366,15 +366,9 @@ impl Simulation {
         j0[own].copy_from_slice(&self.sol.j0[own]);
         let sol = Solution { time: self.sol.time, u, fields, lambda, j0 };
         // the bodies' reference areas: every process's own, to every process
-        let mine: Vec<f64> = (0..own_bodies).flat_map(|b| [p.bodies[b] as f64, self.run.area0_body[b]]).collect();
-        let all = comm.all_gather_varcount(&mine);
-        let mut area = std::collections::HashMap::with_capacity(nb);
-        let wanted: std::collections::HashSet<usize> = part.bodies.iter().copied().collect();
-        for r in all.chunks_exact(2).filter(|r| wanted.contains(&(r[0] as usize))) {
-            area.insert(r[0] as usize, r[1]);
-        }
+        let area = crate::parallel::part::gather_records(comm, (0..own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, p.layout.owner.len(), true).unwrap_or_default();
         let mut scalars = self.scalars();
-        scalars.run.area0_body = part.bodies.iter().map(|b| area.get(b).copied().unwrap_or(f64::NAN)).collect();
+        scalars.run.area0_body = part.bodies.iter().map(|&b| area.get(b).copied().unwrap_or(f64::NAN)).collect();
         scalars.run.remesh_baseline = vec![None; nb];
         scalars.partition.repartitions += 1;
         let whole_ties = self.whole_ties();
