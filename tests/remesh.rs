@@ -702,3 +702,78 @@ dt = 0.1
     let anchor = [(1.0 - h_new.xi_stick) * a[0] + h_new.xi_stick * b[0], (1.0 - h_new.xi_stick) * a[1] + h_new.xi_stick * b[1]];
     assert!((anchor[0] - 3.4).abs() < 1e-12 && (anchor[1] - 4.0).abs() < 1e-12, "anchor moved to {anchor:?}");
 }
+
+/// Re-meshing with the barrier contact (the default): the 2 × 2 aluminium discs of
+/// `jobs/compaction/discs_2x2_lateral.toml` with the barrier instead of the penalty method
+/// (frictionless, or cohering: the particles tied where they touch), compacted to solid ratio
+/// 0.85, then disc 0 re-meshed mid-run. Before the barrier's near nodes were held, the
+/// re-mesh's area-restoring offset pushed the disc's nodes pressed against the walls behind
+/// them (0.16 mm on the 5.2.1 job) and every re-mesh was refused. Checked:
+/// - the re-mesh is taken; every old boundary point of the disc within d̂ + 0.1 h of a wall
+///   (the wall's barrier zero at d̂/2 behind its plane, as the barrier measures it) is a point
+///   of the new boundary bit for bit;
+/// - no boundary node lies inside another particle or behind a wall
+///   (`Simulation::barrier_crossings`), the barrier's κ is kept, and every tie goes over
+///   (cohering: the tied nodes are within d̂ of the other particle, so they are held);
+/// - the transferred state re-converges in place and, after one more step of 0.01 s, the
+///   wall forces agree with the run that was not re-meshed to 1 % of the largest (the
+///   penalty test's tolerance above).
+#[test]
+fn remeshing_with_the_barrier_holds_the_contact_zones() {
+    use mpfem::case;
+    use mpfem::model::Model;
+    use mpfem::solver::Simulation;
+    for cohering in [false, true] {
+        let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
+        let contact = if cohering { "contact = \"cohering\"" } else { "contact = \"sliding\"" };
+        let text = text.replace("method = \"penalty\"\ncontact = \"sliding\"", contact);
+        assert!(!text.contains("penalty") && text.contains(contact), "the job's [contact] table changed");
+        let path = std::env::temp_dir().join(format!("remesh_barrier_{}_{cohering}.toml", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let c = case::load(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let mk = || Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
+        let (mut a, mut b) = (mk(), mk());
+        let mut phi = 0.0;
+        while phi < 0.85 {
+            let ra = a.advance(c.time.dt).unwrap();
+            b.advance(c.time.dt).unwrap();
+            phi = ra.compaction.unwrap().solid_ratio;
+        }
+        let ties_before = b.barrier_ties().unwrap().0;
+        assert!(!cohering || ties_before > 0, "no tie before the re-mesh");
+        let kappa = b.state().scalars.barrier.unwrap().kappa;
+        // the old boundary points of disc 0 within d̂ + 0.1 h of a wall's barrier zero
+        let body = &b.model.bodies[0];
+        let (n0, h) = (body.node_offset, body.contact_h);
+        let dhat = h / 20.0;
+        let x = b.coords(&b.sol.u);
+        let walls = b.model.wall_planes(b.sol.time);
+        let near_wall: Vec<[f64; 2]> = body
+            .mesh
+            .boundary
+            .iter()
+            .map(|e| x[n0 + e[0]])
+            .filter(|p| walls.iter().any(|w| (p[0] - w.point[0]) * w.normal[0] + (p[1] - w.point[1]) * w.normal[1] + 0.5 * dhat < dhat + 0.1 * h))
+            .collect();
+        assert!(near_wall.len() >= 2, "disc 0 does not touch a wall at solid ratio {phi}");
+        b.remesh_body(0, c.bodies[0].mesh_size).unwrap_or_else(|e| panic!("cohering {cohering}: {e}"));
+        let body = &b.model.bodies[0];
+        let x = b.coords(&b.sol.u);
+        let new_points: std::collections::HashSet<[u64; 2]> = body.mesh.boundary.iter().map(|e| x[body.node_offset + e[0]].map(f64::to_bits)).collect();
+        let moved = near_wall.iter().filter(|p| !new_points.contains(&p.map(f64::to_bits))).count();
+        assert_eq!(moved, 0, "cohering {cohering}: {moved} of the {} points at the walls moved", near_wall.len());
+        assert_eq!(b.barrier_crossings(), Some(0));
+        assert_eq!(b.state().scalars.barrier.unwrap().kappa, kappa, "κ not carried over the re-mesh");
+        assert_eq!(b.barrier_ties().unwrap().0, ties_before, "cohering {cohering}: ties lost in the re-mesh");
+        let its = b.equilibrate().unwrap();
+        let ra = a.advance(0.01).unwrap();
+        let rb = b.advance(0.01).unwrap();
+        let (fa, fb) = (ra.compaction.unwrap().force, rb.compaction.unwrap().force);
+        eprintln!("cohering {cohering}, phi {phi:.4}: {} held points at the walls, {ties_before} ties; re-equilibrated in {its} iterations; forces {fa:?} vs {fb:?}", near_wall.len());
+        let scale = fa.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+        for w in 0..4 {
+            assert!((fa[w] - fb[w]).abs() <= 0.01 * scale, "cohering {cohering}, wall {w}: {} vs {} N/mm", fa[w], fb[w]);
+        }
+    }
+}

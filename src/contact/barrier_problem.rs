@@ -665,11 +665,43 @@ impl BarrierContact {
         }
     }
 
+    /// The boundary nodes of particle `body` within `reach` of another particle or of a wall
+    /// at `x` (the walls `walls`, their distance measured from the barrier's zero as in
+    /// [`Self::evaluate`]): its nodes within `reach` of another particle's edges and the ends
+    /// of its edges within `reach` of another particle's nodes, sorted. What a re-mesh keeps
+    /// where it is ([`crate::remesh::remesh_particle_keeping`]), so that the new boundary does
+    /// not move where the particle touches, or nearly touches, anything.
+    pub fn near_nodes(&mut self, x: &[[f64; 2]], walls: &[Wall], body: usize, reach: f64) -> Vec<usize> {
+        self.search.update(x);
+        let (own, others): (Vec<(usize, usize)>, Vec<(usize, usize)>) = self.nodes.iter().partition(|&&(_, b)| b == body);
+        let mut near: Vec<usize> = self.search.pairs(x, &own, reach).into_iter().map(|(n, _)| n).collect();
+        for (_, s) in self.search.pairs(x, &others, reach) {
+            if self.segments[s].body == body {
+                near.extend(self.segments[s].nodes);
+            }
+        }
+        for wall in walls {
+            let n = unit(wall.normal);
+            let point = [wall.point[0] - self.wall_offset * n[0], wall.point[1] - self.wall_offset * n[1]];
+            near.extend(own.iter().filter(|&&(node, _)| point_wall_sq_distance(x[node], point, n).0 < reach).map(|&(node, _)| node));
+        }
+        near.sort_unstable();
+        near.dedup();
+        near
+    }
+
     /// How many boundary nodes lie inside another particle (strictly, by the crossing number
     /// of a ray against that particle's boundary) or on or behind a wall's plane, at `x` with
     /// the walls `walls`: zero for every admissible configuration. An O(N·M) check with a box
     /// filter per particle, for tests and diagnostics.
     pub fn crossings(&self, x: &[[f64; 2]], walls: &[Wall]) -> usize {
+        self.crossings_of(x, walls, None)
+    }
+
+    /// [`Self::crossings`] counting only what involves particle `body` when it is given: its
+    /// nodes inside another particle or behind a wall, and the other particles' nodes inside
+    /// it (a re-meshed particle's new boundary is checked so).
+    pub fn crossings_of(&self, x: &[[f64; 2]], walls: &[Wall], body: Option<usize>) -> usize {
         let n_bodies = self.segments.iter().map(|s| s.body + 1).max().unwrap_or(0);
         let mut boxes = vec![[f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY]; n_bodies];
         let mut by_body: Vec<Vec<[usize; 2]>> = vec![Vec::new(); n_bodies];
@@ -684,9 +716,12 @@ impl BarrierContact {
             }
         }
         let mut count = 0;
+        let only = body;
         for &(node, body) in &self.nodes {
+            // (with `only`: its nodes against everything, the others' against it alone)
+            let mine = only.is_none_or(|o| o == body);
             let p = x[node];
-            let inside = (0..n_bodies).filter(|&b| b != body && !self.is_tied(node, b)).any(|b| {
+            let inside = (0..n_bodies).filter(|&b| b != body && (mine || only == Some(b)) && !self.is_tied(node, b)).any(|b| {
                 let bb = boxes[b];
                 if p[0] <= bb[0] || p[0] >= bb[2] || p[1] <= bb[1] || p[1] >= bb[3] {
                     return false;
@@ -704,7 +739,7 @@ impl BarrierContact {
                 }
                 odd
             });
-            let behind = walls.iter().any(|w| {
+            let behind = mine && walls.iter().any(|w| {
                 let n = unit(w.normal);
                 (p[0] - w.point[0]) * n[0] + (p[1] - w.point[1]) * n[1] <= -self.wall_offset
             });

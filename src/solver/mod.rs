@@ -189,7 +189,9 @@ impl Simulation {
     /// are kept unless their imbalance on the new model is above `[solver]
     /// repartition_imbalance` (see [`Distribution::build`]).
     fn build(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>) -> Result<Self, SolveError> {
-        Self::build_with(model, time, spec, comm, previous, None)
+        // (a rebuild for a re-mesh starts from the running state, set after it)
+        let rebuild = previous.is_some();
+        Self::build_with(model, time, spec, comm, previous, None, rebuild)
     }
 
     /// What of `model` a distributed part ([`Simulation::new_part`]) does not take
@@ -218,6 +220,13 @@ impl Simulation {
     /// # Errors
     /// What the part cannot take (above), or what [`Simulation::new`] refuses.
     pub fn new_part(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
+        Self::part_simulation(part, time, spec, false)
+    }
+
+    /// [`Simulation::new_part`]; with `rebuild` the part is made for a running state (set after
+    /// it: a part grown again or re-meshed), whose reference configuration is not checked as a
+    /// start (a re-meshed particle's is its configuration when it was re-meshed).
+    pub(super) fn part_simulation(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec, rebuild: bool) -> Result<Self, SolveError> {
         let model = &part.model;
         let unsupported = Self::part_refusal(model);
         if let Some(what) = unsupported {
@@ -237,10 +246,10 @@ impl Simulation {
             }
         }
         let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, dof_whole_eq: whole_eq, layout, whole };
-        Self::build_with(model, time, spec, comm, None, Some(sys))
+        Self::build_with(model, time, spec, comm, None, Some(sys), rebuild)
     }
 
-    fn build_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>, part: Option<system::PartSys>) -> Result<Self, SolveError> {
+    fn build_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>, part: Option<system::PartSys>, rebuild: bool) -> Result<Self, SolveError> {
         let mut partition = previous.map_or_else(PartitionStats::default, |p| p.1.clone());
         let par = if part.is_some() {
             partition.ranks = comm.size();
@@ -300,9 +309,10 @@ impl Simulation {
             assembler.set_terms(&mut kk, &pair_dofs, &[]);
             b.walls1 = model.wall_planes(0.0);
             b.walls0 = b.walls1.clone();
-            // the barrier starts from boundaries apart: where two touch it is infinite
+            // the barrier starts from boundaries apart: where two touch it is infinite (a
+            // rebuild's state is checked when it is set, [`Simulation::restore_barrier`])
             let mut eval = crate::contact::barrier_problem::BarrierEval::default();
-            let start = b.contact.evaluate(&model.x0, &b.walls0, false, &mut eval);
+            let start = if rebuild { Ok(()) } else { b.contact.evaluate(&model.x0, &b.walls0, false, &mut eval) };
             if part.is_some() && comm.max(if start.is_err() { 1.0 } else { 0.0 }) > 0.0 && start.is_ok() {
                 return Err(SolveError::Contact("the barrier contact found touching particles at the start on another process".into()));
             }

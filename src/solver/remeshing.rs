@@ -8,6 +8,15 @@ use super::{NewtonFailure, Phase, Simulation, SolveError};
 use crate::material::TimeIncrement;
 use std::collections::HashMap;
 
+/// With the barrier contact a re-mesh keeps where they are the boundary nodes of a particle
+/// within d̂ + `HOLD_REACH` h of another particle or a wall (h its contact length): the new
+/// boundary's free points move by at most the coarsening tolerance 0.05 h plus the small
+/// offset that gives the area back ([`crate::remesh::remesh_particle_keeping`]), so twice that
+/// tolerance leaves them short of what they face. Without it the offset pushed nodes pressed
+/// against a wall through it (measured on the 5.2.1 job with `[remesh]`: 0.16 mm behind the
+/// bottom wall, every re-mesh refused and the run jammed at solid ratio 0.908).
+pub const HOLD_REACH: f64 = 0.1;
+
 impl Simulation {
     /// Re-mesh body `b` in its current configuration with elements of size about `h` (mm)
     /// and carry the solution over ([`crate::remesh`]): the new mesh keeps every boundary point
@@ -31,10 +40,20 @@ impl Simulation {
     }
 
     /// The boundary nodes of body `b` (numbered within the body) in contact, as slave or
-    /// master, at the last evaluation of the committed state.
-    fn contact_nodes(&self, b: usize) -> Vec<usize> {
+    /// master, at the last evaluation of the committed state; with the barrier contact, those
+    /// within d̂ + [`HOLD_REACH`] h (h the particle's contact length) of another particle or
+    /// a wall at the committed state ([`crate::contact::barrier_problem::BarrierContact::near_nodes`]).
+    fn contact_nodes(&mut self, b: usize) -> Vec<usize> {
         let Some(body) = self.model.bodies.get(b) else { return Vec::new() };
         let (n0, nn) = (body.node_offset, body.mesh.n_nodes());
+        if self.barrier.is_some() {
+            let x = self.coords(&self.sol.u);
+            let walls = self.model.wall_planes(self.sol.time);
+            let h = body.contact_h;
+            let Some(c) = self.barrier.as_mut().map(|r| &mut r.contact) else { return Vec::new() };
+            let reach = c.dhat + HOLD_REACH * h;
+            return c.near_nodes(&x, &walls, b, reach).into_iter().filter_map(|n| n.checked_sub(n0).filter(|&k| k < nn)).collect();
+        }
         match self.contact.as_ref() {
             Some(c) => (0..nn)
                 .filter(|&k| {
@@ -115,19 +134,38 @@ impl Simulation {
         // (the default contact penalty 10 E/h and the stabilisation springs ζ E a/h² keep the
         // particle's own h, `Body::contact_h`, which `with_body_mesh` keeps)
         let x_new = next.coords(&next.sol.u);
+        // old node → new node: the other bodies' all, the re-meshed body's that the new mesh
+        // keeps where they were
+        let mut node_map = vec![None; self.model.x0.len()];
+        for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
+            for k in 0..ob.mesh.n_nodes() {
+                node_map[ob.node_offset + k] = if c == b { kept[k].map(|m| nb.node_offset + m) } else { Some(nb.node_offset + k) };
+            }
+        }
         if let (Some(old), Some(new)) = (self.contact.as_ref(), next.contact.as_mut()) {
             // the contact history of the whole assembly (stick anchors, multipliers, wall
             // histories) goes to the new numbering, not only the re-meshed body's
-            let mut node_map = vec![None; self.model.x0.len()];
-            for (c, (ob, nb)) in self.model.bodies.iter().zip(&next.model.bodies).enumerate() {
-                for k in 0..ob.mesh.n_nodes() {
-                    node_map[ob.node_offset + k] = if c == b { kept[k].map(|m| nb.node_offset + m) } else { Some(nb.node_offset + k) };
-                }
-            }
             let carried = new.carry_history(old, &node_map, [&self.model.x0, &x], [&next.model.x0, &x_new]);
             tracing::debug!(body = b, ?carried, "contact history carried over the re-mesh");
         }
         next.sol.time = self.sol.time;
+        if let Some(old) = self.barrier.as_ref() {
+            // the barrier's state (κ, the descent, the ties in the new numbering), then the new
+            // boundary checked: apart from every other particle and wall, crossing none
+            let mut state = old.state();
+            let new_segments = next.barrier.as_ref().map_or(&[][..], |n| &n.contact.segments[..]);
+            (state.ties, state.tied) = carry_ties(&old.contact.segments, new_segments, &state.ties, &node_map);
+            let dropped = old.contact.ties.len() - state.ties.len();
+            if dropped > 0 {
+                tracing::debug!(body = b, dropped, "ties on the re-meshed particle's moved boundary dropped");
+            }
+            next.restore_barrier(state).map_err(|e| fail(format!("the new boundary: {e}")))?;
+            let walls = next.model.wall_planes(next.sol.time);
+            let crossed = next.barrier.as_ref().map_or(0, |n| n.contact.crossings_of(&x_new, &walls, Some(b)));
+            if crossed > 0 {
+                return Err(fail(format!("the new boundary: {crossed} boundary node(s) inside another particle or behind a wall")));
+            }
+        }
         // the run's counters, energies, step size and references go on (the volume error
         // keeps the initial areas)
         next.run = self.run.clone();
@@ -298,4 +336,27 @@ impl Simulation {
         self.run.total_iterations += trial.iterations;
         Ok(trial.iterations)
     }
+}
+
+/// The ties `ties` (cohering particles) of the contact whose boundary edges were `old` in the
+/// numbering of a re-meshed model whose edges are `new`, with `node_map` the old node → new
+/// node: a tie goes over when its node and its edge's two ends are kept (the re-meshed
+/// particle keeps its contact zones' nodes where they were, and consecutive kept nodes stay an
+/// edge of the new boundary); the others are dropped. Returns the ties and the (node, body)
+/// pairs they hold, sorted.
+fn carry_ties(old: &[crate::contact::Segment], new: &[crate::contact::Segment], ties: &[crate::contact::barrier_problem::Tie], node_map: &[Option<usize>]) -> (Vec<crate::contact::barrier_problem::Tie>, Vec<(usize, usize)>) {
+    let edges: HashMap<[usize; 2], usize> = new.iter().enumerate().map(|(s, seg)| (seg.nodes, s)).collect();
+    let map = |n: usize| node_map.get(n).copied().flatten();
+    let mut out = Vec::with_capacity(ties.len());
+    let mut tied = Vec::with_capacity(ties.len());
+    for t in ties {
+        let Some(seg) = old.get(t.segment) else { continue };
+        let (Some(n), Some(a), Some(c)) = (map(t.node), map(seg.nodes[0]), map(seg.nodes[1])) else { continue };
+        let Some(&s) = edges.get(&[a, c]) else { continue };
+        out.push(crate::contact::barrier_problem::Tie { node: n, segment: s, dofs: [2 * n, 2 * n + 1, 2 * a, 2 * a + 1, 2 * c, 2 * c + 1], ..*t });
+        tied.push((n, new[s].body));
+    }
+    tied.sort_unstable();
+    tied.dedup();
+    (out, tied)
 }

@@ -372,7 +372,7 @@ impl Simulation {
         scalars.run.remesh_baseline = vec![None; nb];
         scalars.partition.repartitions += 1;
         let whole_ties = self.whole_ties();
-        let mut sim = Simulation::new_part(part, time, spec).map_err(|e: SolveError| e.to_string())?;
+        let mut sim = Simulation::part_simulation(part, time, spec, true).map_err(|e: SolveError| e.to_string())?;
         // its ties (on its own nodes) in the new part's numbering of the edges and bodies
         if let Some(b) = scalars.barrier.as_mut() {
             let ties = sim.local_ties(&whole_ties.0, &whole_ties.1);
