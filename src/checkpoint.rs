@@ -532,7 +532,7 @@ impl Checkpoint {
         let model = self.model(base)?;
         let path = self.path.clone();
         let mismatch = |reason: String| CheckpointError::Mismatch { path: path.clone(), reason };
-        let mut sim = Simulation::new_with(model, time, spec, comm).map_err(|e| mismatch(e.to_string()))?;
+        let mut sim = Simulation::new_for_state(model, time, spec, comm).map_err(|e| mismatch(e.to_string()))?;
         sim.set_state(self.state).map_err(mismatch)?;
         Ok(sim)
     }

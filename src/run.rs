@@ -559,7 +559,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let ranks = comm.size();
     // (on parts, rank 0 keeps the whole model for the output: the state is gathered onto it
     // at the output steps)
-    let (mut sim, resumed, whole) = match checkpoint {
+    let (mut sim, resumed, mut whole) = match checkpoint {
         None if parts => match part_simulation(&model, &c, &comm, None, RankPart::reach(&model)) {
             Ok(sim) => (sim, None, Some(model)),
             Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
@@ -675,6 +675,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     sim.set_interrupt(Arc::clone(&stop_flag));
     let run_started = Instant::now();
     let mut observer = |s: &Simulation, r: &StepReport| {
+        // (on parts: the particles re-meshed in this step into rank 0's whole model first)
+        if let Err(e) = put_remeshed(&mut whole, s) {
+            reporter.note(Note::Warning, &e);
+        }
         last_report = Some(r.clone());
         max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
         if let Some(c) = &r.compaction {
@@ -767,6 +771,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             break segment;
         }
     };
+    // (a particle re-meshed in a step that did not converge after it)
+    if let Err(e) = put_remeshed(&mut whole, &sim) {
+        reporter.note(Note::Warning, &e);
+    }
     if let Ok(s) = result.as_mut() {
         s.wall_time_s = wall_before + run_started.elapsed().as_secs_f64();
         if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED {
@@ -972,6 +980,19 @@ fn part_output_due(step: usize, every: usize, probes: bool, signal: usize, check
     probes || (every > 0 && step % every == 0) || signal != 0 || checkpoint
 }
 
+/// On rank 0 of a run on parts: the particles re-meshed since the last call
+/// ([`Simulation::take_remeshed`]) put into `whole`, the model the output is written on.
+///
+/// # Errors
+/// A new mesh the whole model does not take (the output then shows the old one).
+fn put_remeshed(whole: &mut Option<Model>, sim: &Simulation) -> Result<(), String> {
+    let Some(w) = whole.as_mut() else { return Ok(()) };
+    for (g, mesh) in sim.take_remeshed() {
+        *w = w.with_body_mesh(g, mesh).map_err(|e| format!("the output's model: particle {g}'s new mesh: {e}"))?;
+    }
+    Ok(())
+}
+
 /// This process's part of `whole` as a simulation of case `c` ([`Simulation::new_part`]): from
 /// the start, or at the whole model's `state` (a checkpoint's, read on every process), with the
 /// ghosts where the particles are in it. Collective.
@@ -982,7 +1003,11 @@ fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: O
         None => whole.x0.clone(),
     };
     let part = crate::parallel::part::RankPart::for_run(whole, &x, reach, Arc::clone(comm)).map_err(|e| e.to_string())?;
-    let mut sim = Simulation::new_part(part, c.time.clone(), c.solver.clone()).map_err(|e| e.to_string())?;
+    let mut sim = match state.is_some() {
+        true => Simulation::new_part_for_state(part, c.time.clone(), c.solver.clone()),
+        false => Simulation::new_part(part, c.time.clone(), c.solver.clone()),
+    }
+    .map_err(|e| e.to_string())?;
     if let Some(s) = state {
         sim.set_whole_state(s)?;
     }

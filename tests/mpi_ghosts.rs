@@ -223,6 +223,19 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
     same_part(&far, &far_whole, "the neighbours' neighbours");
     let back = RankPart::regrow(far.view(), &at(&far), dhat + h).expect("grown back");
     same_part(&back, &part, "back to the neighbours");
+    // with prescribed dofs on every fifth disc (the whole model's equations skip them; a part
+    // grown again numbers its own from the layout's counts of them): the same
+    let mut pinned = whole.clone();
+    for b in (0..pinned.bodies.len()).step_by(5) {
+        let n = pinned.bodies[b].node_offset;
+        pinned.loading.prescribed.extend([2 * n + 1, 2 * n + 6, 2 * n + 7].map(|dof| mpfem::loading::PrescribedDof { dof, value: 0.0, amplitude: 0 }));
+    }
+    pinned.loading.prescribed.sort_by_key(|p| p.dof);
+    let pinned_part = RankPart::new(&pinned, &x, &owner, dhat + h, comm.clone()).expect("the pinned part");
+    let pinned_lonely = RankPart::new(&pinned, &pinned.x0, &owner, 0.0, comm.clone()).expect("the pinned part without ghosts");
+    let pinned_near = RankPart::regrow(pinned_lonely.view(), &at(&pinned_lonely), dhat + h).expect("the pinned part grown");
+    assert_ne!(pinned_near.whole_eq, near.whole_eq, "rank {rank}: the prescribed dofs change no equation");
+    same_part(&pinned_near, &pinned_part, "with prescribed dofs");
 
     // the distributed residual: owned elements, owned first sides, reverse scatter
     let u_part = part.restrict(&u, 2);

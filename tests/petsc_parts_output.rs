@@ -39,6 +39,14 @@
 //!   volume errors 1e-10 absolute), and the 2-rank checkpoint (its ties gathered into the
 //!   whole model's numbering of nodes and edges) continued on 3 ranks, and the serial one on 2.
 //!
+//! - Re-meshing (`[remesh]` with `min_scaled_jacobian = 0.828`, just below the discs' first
+//!   meshes' 0.832: all nine discs are re-meshed at step 3, each by its owner): 2 ranks against
+//!   the serial run (history and `results.h5`, whose steps after the re-mesh carry the new
+//!   meshes, 1e-8), the 2-rank checkpoint written after the re-mesh (with the new meshes'
+//!   quality, the re-mesh baselines) continued on 3 ranks, and
+//!   the serial one on 2 ranks and serially (a checkpoint's re-meshed particles have their
+//!   configuration when re-meshed as their reference, beside the others' original one).
+//!
 //! Needs Open MPI's `mpirun` and PETSc (`scripts/setup.sh` installs both).
 #![cfg(feature = "petsc")]
 
@@ -339,5 +347,45 @@ fn cohering_parts_write_and_restart_their_ties() {
     run(&parts_case, Some(2), &from_serial, &["--quiet", "--allow-case-change", "--restart", from_serial.to_str().unwrap()]);
     let worst_serial = history_difference_but(&serial, &from_serial, "the cohering serial checkpoint on 2 ranks", &VOLUMES);
     println!("cohering checkpoints continued: 2 ranks' on 3 {worst:.2e}, the serial one on 2 {worst_serial:.2e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn remeshing_parts_write_the_serial_results_and_restart() {
+    let dir = tmpdir("remesh");
+    let edit = |t: String| t.replace("[output]\nevery = 0", "[remesh]\nmin_scaled_jacobian = 0.828\n\n[output]\nevery = 2\ncheckpoint_every = 5\ncheckpoint_minutes = 0");
+    let (serial_case, parts_case) = serial_and_parts(&dir, edit, &["min_scaled_jacobian = 0.828", "every = 2"]);
+    let serial = dir.join("serial");
+    run(&serial_case, None, &serial, &["--quiet"]);
+    let (h, rows) = read_csv(&serial.join("history.csv"));
+    let col = h.iter().position(|c| c == "remeshes").expect("a remeshes column");
+    let remeshes: f64 = rows.iter().map(|r| r[col]).sum();
+    let first = rows.iter().position(|r| r[col] > 0.0).expect("a re-mesh") + 1;
+    assert!(remeshes >= 9.0 && first < 5 && rows.len() < 10, "{remeshes} re-meshes, the first at step {first}, {} steps: the checkpoint at step 5, the last, no longer follows them", rows.len());
+    let two = dir.join("two");
+    run(&parts_case, Some(2), &two, &["--quiet"]);
+    let worst = history_difference(&serial, &two, "re-meshing on 2 ranks");
+    let (results, n) = results_difference(&serial, &two);
+    // the output's meshes are the new ones after the re-mesh
+    let file = hdf5::File::open(two.join("results.h5")).expect("results.h5");
+    let cells = |s: &str| file.dataset(&format!("steps/{s}/cells")).expect("cells").shape()[0];
+    assert_ne!(cells("000002"), cells("000004"), "the output after the re-mesh has the old mesh");
+    println!("re-meshing on 2 ranks: {remeshes} re-meshes, {} then {} elements; history {worst:.2e}, results.h5 {results:.2e} over {n} datasets", cells("000002"), cells("000004"));
+    // the 2-rank checkpoint after the re-mesh (step 5, with the new meshes' quality as their
+    // re-mesh baselines: without them the restart re-meshed three discs again) on 3 ranks; the
+    // serial one on 2, and serially
+    let three = dir.join("three");
+    stopped_at(&two, &three, 5);
+    run(&parts_case, Some(3), &three, &["--quiet", "--restart", three.to_str().unwrap()]);
+    let on_three = history_difference(&serial, &three, "the re-meshed 2-rank checkpoint on 3");
+    let from_serial = dir.join("from-serial");
+    stopped_at(&serial, &from_serial, 5);
+    run(&parts_case, Some(2), &from_serial, &["--quiet", "--allow-case-change", "--restart", from_serial.to_str().unwrap()]);
+    let on_two = history_difference(&serial, &from_serial, "the re-meshed serial checkpoint on 2 ranks");
+    let again = dir.join("serial-again");
+    stopped_at(&serial, &again, 5);
+    run(&serial_case, None, &again, &["--quiet", "--restart", again.to_str().unwrap()]);
+    let serially = history_difference(&serial, &again, "the re-meshed serial checkpoint serially");
+    println!("re-meshed checkpoints continued: 2 ranks' on 3 {on_three:.2e}, the serial one on 2 {on_two:.2e}, serially {serially:.2e}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -105,24 +105,83 @@ pub struct BodyLayout {
     /// The whole model's boundary edge of each body's first (the contact's segments: every
     /// body's `mesh.boundary` in body order), and one past the last body's.
     pub segment_offset: Vec<usize>,
+    /// Each body's element count.
+    pub n_elements: Vec<usize>,
+    /// The prescribed dofs of the bodies before each body, and of all of them (one past the
+    /// last): the whole model's equation of a body's free dof is its whole dof less those and
+    /// its own prescribed dofs before it ([`crate::assembly::number_equations`]).
+    pub fixed_before: Vec<usize>,
 }
+
+/// A body's new sizes after a re-mesh: (body, nodes, elements, boundary edges).
+pub type Resized = (usize, usize, usize, usize);
 
 impl BodyLayout {
     /// The layout of `whole`'s bodies owned by `owner`.
     pub fn new(whole: &Model, owner: &[usize]) -> Self {
         let b = &whole.bodies;
-        Self {
-            owner: owner.to_vec(),
-            n_nodes: b.iter().map(|b| b.mesh.n_nodes()).collect(),
-            node_offset: b.iter().map(|b| b.node_offset).collect(),
-            elem_offset: b.iter().map(|b| b.elem_offset).collect(),
-            segment_offset: std::iter::once(0)
-                .chain(b.iter().scan(0, |at, b| {
-                    *at += b.mesh.boundary.len();
+        let mut fixed = vec![0; b.len()];
+        for p in &whole.loading.prescribed {
+            let n = p.dof / 2;
+            let k = b.partition_point(|b| b.node_offset <= n);
+            if k >= 1 {
+                fixed[k - 1] += 1;
+            }
+        }
+        Self::from_sizes(owner.to_vec(), b.iter().map(|b| (b.mesh.n_nodes(), b.mesh.n_elements(), b.mesh.boundary.len())).collect(), &fixed)
+    }
+
+    /// The layout of bodies owned by `owner` with `sizes` (nodes, elements, boundary edges)
+    /// and `fixed` prescribed dofs each, numbered in body order.
+    fn from_sizes(owner: Vec<usize>, sizes: Vec<(usize, usize, usize)>, fixed: &[usize]) -> Self {
+        let prefix = |f: &dyn Fn(&(usize, usize, usize)) -> usize| -> Vec<usize> {
+            std::iter::once(0)
+                .chain(sizes.iter().scan(0, |at, s| {
+                    *at += f(s);
                     Some(*at)
                 }))
-                .collect(),
+                .collect()
+        };
+        let mut node_offset = prefix(&|s| s.0);
+        let mut elem_offset = prefix(&|s| s.1);
+        node_offset.pop();
+        elem_offset.pop();
+        let segment_offset = prefix(&|s| s.2);
+        let fixed_before = std::iter::once(0)
+            .chain(fixed.iter().scan(0, |at, &f| {
+                *at += f;
+                Some(*at)
+            }))
+            .collect();
+        Self { owner, n_nodes: sizes.iter().map(|s| s.0).collect(), node_offset, elem_offset, segment_offset, n_elements: sizes.iter().map(|s| s.1).collect(), fixed_before }
+    }
+
+    /// This layout with the bodies of `resized` re-meshed to their new sizes (every body after
+    /// them renumbered). A re-meshed body has no prescribed dof ([`Model::remesh_constraint`]).
+    pub fn resized(&self, resized: &[Resized]) -> Self {
+        let mut sizes: Vec<(usize, usize, usize)> = (0..self.owner.len()).map(|b| (self.n_nodes[b], self.n_elements[b], self.segment_offset[b + 1] - self.segment_offset[b])).collect();
+        for &(b, nn, ne, ns) in resized {
+            if let Some(s) = sizes.get_mut(b) {
+                *s = (nn, ne, ns);
+            }
         }
+        let fixed: Vec<usize> = self.fixed_before.windows(2).map(|w| w[1] - w[0]).collect();
+        Self::from_sizes(self.owner.clone(), sizes, &fixed)
+    }
+
+    /// The body holding the whole model's element `e` (None past the last).
+    pub fn element_body(&self, e: usize) -> Option<usize> {
+        let b = self.elem_offset.partition_point(|&o| o <= e);
+        (b >= 1 && e < self.elem_offset[b - 1] + self.n_elements[b - 1]).then(|| b - 1)
+    }
+
+    /// The whole model's nodes and elements.
+    pub fn totals(&self) -> (usize, usize) {
+        let n = self.owner.len();
+        if n == 0 {
+            return (0, 0);
+        }
+        (self.node_offset[n - 1] + self.n_nodes[n - 1], self.elem_offset[n - 1] + self.n_elements[n - 1])
     }
 
     /// The body whose boundary holds the whole model's boundary edge `w` (None past the last).
@@ -169,6 +228,8 @@ pub struct RankPart {
     pub whole_eq: Vec<usize>,
     /// Every body's owner, size and place in the whole model.
     pub layout: Arc<BodyLayout>,
+    /// The reach its ghosts were chosen with (mm).
+    pub reach: f64,
 }
 
 /// A part as [`RankPart::regrow`] reads it (the fields of a [`RankPart`], wherever they are
@@ -178,8 +239,6 @@ pub struct PartView<'a> {
     pub nodes: &'a IndexMap,
     pub bodies: &'a [usize],
     pub n_owned_bodies: usize,
-    pub whole: &'a PartMap,
-    pub whole_eq: &'a [usize],
     pub layout: &'a Arc<BodyLayout>,
 }
 
@@ -237,12 +296,12 @@ impl RankPart {
         let (model, map) = whole.part(&bodies, owned.len())?;
         let (eq, _) = crate::assembly::number_equations(whole.n_dofs(), whole.loading.prescribed.iter().map(|p| p.dof));
         let whole_eq = map.node.iter().flat_map(|&n| [eq[2 * n], eq[2 * n + 1]]).collect();
-        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq, layout: Arc::new(BodyLayout::new(whole, owner)) })
+        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq, layout: Arc::new(BodyLayout::new(whole, owner)), reach })
     }
 
     /// This part's fields as [`RankPart::regrow`] reads them.
     pub fn view(&self) -> PartView<'_> {
-        PartView { model: &self.model, nodes: &self.nodes, bodies: &self.bodies, n_owned_bodies: self.n_owned_bodies, whole: &self.whole, whole_eq: &self.whole_eq, layout: &self.layout }
+        PartView { model: &self.model, nodes: &self.nodes, bodies: &self.bodies, n_owned_bodies: self.n_owned_bodies, layout: &self.layout }
     }
 
     /// The part `part` with its ghosts chosen again: the other processes' bodies within
@@ -259,19 +318,34 @@ impl RankPart {
     /// Coordinates of another length than the part's nodes, boxes that are not finite, a
     /// negative reach, or a ghost its owner cannot send — on every process alike.
     pub fn regrow(part: PartView<'_>, x: &[[f64; 2]], reach: f64) -> Result<Self, PartError> {
+        let layout = Arc::clone(part.layout);
+        Self::regrow_with(part, x, reach, &layout, &[])
+    }
+
+    /// [`RankPart::regrow`] with the bodies laid out by `layout` (every process's alike), which
+    /// may differ from the part's in the sizes of bodies re-meshed since
+    /// ([`BodyLayout::resized`]: `part.model` holds its own re-meshed bodies already), and with
+    /// the ghosts of `stale` (bodies re-meshed by their owners, ascending) sent again by their
+    /// owners rather than kept. Collective.
+    ///
+    /// # Errors
+    /// As [`RankPart::regrow`], and own bodies whose sizes are not the layout's.
+    pub fn regrow_with(part: PartView<'_>, x: &[[f64; 2]], reach: f64, layout: &Arc<BodyLayout>, stale: &[usize]) -> Result<Self, PartError> {
         let comm = part.nodes.comm_arc();
         let (rank, size) = (comm.rank(), comm.size());
-        let layout = part.layout;
         let nb = layout.owner.len();
         let n_own = part.n_owned_bodies;
         let mut problem = (x.len() != part.model.n_nodes()).then(|| format!("{} coordinates for the part's {} nodes", x.len(), part.model.n_nodes()));
+        if let Some(k) = (0..n_own).find(|&k| part.model.bodies.get(k).map(|b| b.mesh.n_nodes()) != layout.n_nodes.get(part.bodies[k]).copied()) {
+            problem = problem.or(Some(format!("own body {} has other sizes than the layout's", part.bodies[k])));
+        }
         // every process's own bodies' boxes, to every process
         let own = if problem.is_none() { crate::distribute::particles_at(part.model, x) } else { Vec::new() };
         let (boxes, _) = all_boxes(&*comm, part.bodies.iter().copied().zip(own).take(n_own), nb);
         let ghosts = ghost_bodies(&boxes, &layout.owner, rank, reach)?;
         drop(boxes);
         // the new ghosts this process does not hold, asked of their owners
-        let held = |g: usize| part.bodies[n_own..].binary_search(&g).ok().map(|k| n_own + k);
+        let held = |g: usize| if stale.binary_search(&g).is_ok() { None } else { part.bodies[n_own..].binary_search(&g).ok().map(|k| n_own + k) };
         let mut ask = vec![Vec::new(); size];
         for &g in ghosts.iter().filter(|&&g| held(g).is_none()) {
             ask[layout.owner[g]].push(g as f64);
@@ -322,24 +396,41 @@ impl RankPart {
         if failed {
             return Err(PartError::Migration(problem.unwrap_or_else(|| "on another process".into())));
         }
-        let model = part.model.with_ghosts(n_own, new_ghosts)?;
-        let own_nodes = part.nodes.n_owned();
-        let own_elements = model.bodies.get(n_own).map_or(model.elements.len(), |b| b.elem_offset);
-        let mut whole = PartMap { node: part.whole.node[..own_nodes].to_vec(), element: part.whole.element[..own_elements].to_vec() };
-        for (b, &g) in model.bodies[n_own..].iter().zip(&ghosts) {
+        let mut model = part.model.with_ghosts(n_own, new_ghosts)?;
+        let (n_nodes, n_elements) = layout.totals();
+        if let Some(w) = model.whole.as_mut() {
+            (w.n_nodes, w.n_elements) = (n_nodes, n_elements);
+        }
+        let bodies: Vec<usize> = part.bodies[..n_own].iter().chain(&ghosts).copied().collect();
+        let mut whole = PartMap::default();
+        for (b, &g) in model.bodies.iter().zip(&bodies) {
             whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
             whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
         }
-        // the ghosts' whole equations from their owners (−1: prescribed)
-        let fixed = crate::assembly::FIXED;
-        let mut eq: Vec<f64> = (0..2 * nodes.n_local()).map(|d| match part.whole_eq.get(d) {
-            Some(&q) if d < 2 * own_nodes && q != fixed => q as f64,
-            _ => -1.0,
-        }).collect();
+        // the whole equations of its own dofs from the layout, the ghosts' from their owners
+        // (−1: prescribed)
+        let mut eq = vec![-1.0; 2 * nodes.n_local()];
+        let prescribed = &model.loading.prescribed;
+        let mut at = 0;
+        for (b, &g) in model.bodies[..n_own].iter().zip(&bodies) {
+            let first = 2 * b.node_offset;
+            let base = 2 * layout.node_offset[g] - layout.fixed_before[g];
+            let mut fixed_here = 0;
+            for d in first..first + 2 * b.mesh.n_nodes() {
+                while at < prescribed.len() && prescribed[at].dof < d {
+                    at += 1;
+                }
+                if at < prescribed.len() && prescribed[at].dof == d {
+                    fixed_here += 1;
+                } else {
+                    eq[d] = (base + d - first - fixed_here) as f64;
+                }
+            }
+        }
         nodes.forward(&mut eq, 2);
+        let fixed = crate::assembly::FIXED;
         let whole_eq = eq.iter().map(|&q| if q < 0.0 { fixed } else { q as usize }).collect();
-        let bodies = part.bodies[..n_own].iter().chain(&ghosts).copied().collect();
-        Ok(Self { model, bodies, n_owned_bodies: n_own, nodes, whole, whole_eq, layout: Arc::clone(layout) })
+        Ok(Self { model, bodies, n_owned_bodies: n_own, nodes, whole, whole_eq, layout: Arc::clone(layout), reach })
     }
 
     /// The part's slice of a vector of the whole model's nodes (`bs` values per node).
@@ -535,6 +626,29 @@ fn read_ghost(at: &mut &[f64]) -> Result<GhostBody, String> {
         .collect::<Result<Vec<_>, String>>()?;
     let mesh = Mesh { nodes, elements, boundary, edge_sets };
     Ok(GhostBody { body: Body { name, mesh, material, node_offset: 0, elem_offset: 0, mesh_size, contact_h }, x0, prescribed })
+}
+
+/// Every process's `bodies` (whole model's body, its [`GhostBody`]) on rank 0, in body order;
+/// empty on the others. Collective.
+///
+/// # Errors
+/// A record that does not decode (on rank 0).
+pub fn bodies_to_root(comm: &dyn Collective, bodies: &[(usize, GhostBody)]) -> Result<Vec<(usize, GhostBody)>, PartError> {
+    let mut buf = Vec::new();
+    for (g, b) in bodies {
+        buf.push(*g as f64);
+        write_ghost(b, &mut buf);
+    }
+    let all = comm.gather_varcount_to_root(&buf);
+    drop(buf);
+    let mut out = Vec::new();
+    let mut at = &all[..];
+    while !at.is_empty() {
+        let g = read_usize(&mut at).map_err(PartError::Migration)?;
+        out.push((g, read_ghost(&mut at).map_err(PartError::Migration)?));
+    }
+    out.sort_by_key(|(g, _)| *g);
+    Ok(out)
 }
 
 /// Rank 0's vector of `n` records of `bs` values, each process sending `(index, values)`

@@ -69,7 +69,43 @@ pub struct QualityCheck {
     pub n_bad_elements: usize,
 }
 
+/// The numbers of a [`QualityCheck`] record ([`QualityCheck::to_record`]).
+pub const QUALITY_RECORD: usize = 9;
+
 impl QualityCheck {
+    /// The check as numbers (to send between processes): whether a limit is crossed, the
+    /// limits crossed as bits (1 scaled Jacobian, 2 aspect ratio, 4 angle), each measure's
+    /// worst value and element, and the elements crossing a limit.
+    pub fn to_record(&self) -> [f64; QUALITY_RECORD] {
+        let bits = self.violated.iter().map(|m| match m {
+            QualityMeasure::ScaledJacobian => 1,
+            QualityMeasure::AspectRatio => 2,
+            QualityMeasure::MinAngle => 4,
+        });
+        let w = |w: Worst| [w.value, w.element as f64];
+        let [a, b] = w(self.scaled_jacobian);
+        let [c, d] = w(self.aspect_ratio);
+        let [e, f] = w(self.min_angle_deg);
+        [f64::from(u8::from(self.needs_remesh)), f64::from(bits.fold(0u8, |m, b| m | b)), a, b, c, d, e, f, self.n_bad_elements as f64]
+    }
+
+    /// The check of a record of [`Self::to_record`]; None for one that is not (bits out of
+    /// range, counts that are not whole numbers).
+    pub fn from_record(r: &[f64]) -> Option<Self> {
+        let count = |v: f64| (v >= 0.0 && v.fract() == 0.0 && v < 1e15).then_some(v as usize);
+        let [needs, bits, a, b, c, d, e, f, n] = <[f64; QUALITY_RECORD]>::try_from(r).ok()?;
+        let bits = count(bits).filter(|&b| b < 8)?;
+        let violated = [(1, QualityMeasure::ScaledJacobian), (2, QualityMeasure::AspectRatio), (4, QualityMeasure::MinAngle)].into_iter().filter(|(m, _)| bits & m != 0).map(|(_, q)| q).collect();
+        Some(Self {
+            needs_remesh: needs != 0.0,
+            violated,
+            scaled_jacobian: Worst { value: a, element: count(b)? },
+            aspect_ratio: Worst { value: c, element: count(d)? },
+            min_angle_deg: Worst { value: e, element: count(f)? },
+            n_bad_elements: count(n)?,
+        })
+    }
+
     /// The worst value and element of a measure.
     pub fn worst(&self, m: QualityMeasure) -> Worst {
         match m {
@@ -146,6 +182,24 @@ mod tests {
     /// Index of the node at (i, j) of the 4×4 node grid (row by row from the bottom left).
     fn node(i: usize, j: usize) -> usize {
         4 * j + i
+    }
+
+    /// A check goes through its record unchanged (a distributed run's checkpoint sends it so),
+    /// and a record out of range is refused.
+    #[test]
+    fn a_check_survives_its_record() {
+        let mut m = grid();
+        m.nodes[node(3, 3)] = [6.0, 2.5];
+        let limits = QualityLimits { min_scaled_jacobian: 0.2, max_aspect_ratio: 1.5, min_angle_deg: 15.0 };
+        let c = check_quality(&m, &m.nodes, &limits).unwrap();
+        assert!(c.violated.len() >= 2, "{c:?}");
+        assert_eq!(QualityCheck::from_record(&c.to_record()), Some(c.clone()));
+        let mut bad = c.to_record();
+        bad[1] = 8.0;
+        assert_eq!(QualityCheck::from_record(&bad), None);
+        bad = c.to_record();
+        bad[3] = 1.5;
+        assert_eq!(QualityCheck::from_record(&bad), None);
     }
 
     #[test]

@@ -30,6 +30,7 @@
 mod barrier;
 mod newton;
 mod params;
+mod remesh_parts;
 mod remeshing;
 mod report;
 mod saddle;
@@ -184,6 +185,20 @@ impl Simulation {
         Self::build(model, time, spec, comm, None)
     }
 
+    /// [`Simulation::new_with`] for a state set right after it ([`Simulation::set_state`]: a
+    /// restart): its reference configuration is not checked as a start (a particle re-meshed
+    /// before the checkpoint has its configuration then as its reference, beside the others'
+    /// original ones); the barrier is checked at the state set.
+    pub fn new_for_state(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>) -> Result<Self, SolveError> {
+        Self::build_with(model, time, spec, comm, None, None, true)
+    }
+
+    /// [`Simulation::new_part`] for a state set right after it ([`Simulation::set_whole_state`]:
+    /// a restart on parts; see [`Simulation::new_for_state`]).
+    pub fn new_part_for_state(part: crate::parallel::part::RankPart, time: TimeSpec, spec: SolverSpec) -> Result<Self, SolveError> {
+        Self::part_simulation(part, time, spec, true)
+    }
+
     /// [`Simulation::new_with`]; with `previous` (the owners of the bodies in the simulation
     /// this one replaces, when any process owned them, and its partition figures) the owners
     /// are kept unless their imbalance on the new model is above `[solver]
@@ -201,8 +216,6 @@ impl Simulation {
             Some("a model without contact (one body, no walls)")
         } else if model.contact.method != crate::contact::ContactMethod::Barrier {
             Some("a contact method other than the barrier")
-        } else if model.remesh.enabled {
-            Some("re-meshing")
         } else {
             None
         }
@@ -215,7 +228,7 @@ impl Simulation {
     /// processes (see [`crate::parallel`]). Every process of the part's map calls this.
     ///
     /// For now a part takes the barrier contact (frictionless, with friction or cohering),
-    /// quasi-statics or implicit dynamics, and no re-meshing; anything else is refused by name.
+    /// quasi-statics (with re-meshing) or implicit dynamics; anything else is refused by name.
     ///
     /// # Errors
     /// What the part cannot take (above), or what [`Simulation::new`] refuses.
@@ -235,7 +248,7 @@ impl Simulation {
         let (eq, _) = number_equations(model.n_dofs(), model.loading.prescribed.iter().map(|p| p.dof));
         let comm = part.nodes.comm_arc();
         let eqs = part.equation_map(&eq).map_err(|e| SolveError::Linear(LinalgError::Other(e.to_string())))?;
-        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole, layout } = part;
+        let crate::parallel::part::RankPart { model, bodies, n_owned_bodies, nodes, whole_eq, whole, layout, reach } = part;
         let own_dofs = 2 * nodes.n_owned();
         let own_eqs = eqs.n_owned();
         // the whole model's equation of each of the part's equations
@@ -245,7 +258,7 @@ impl Simulation {
                 eq_whole[q] = whole_eq.get(d).copied().unwrap_or(FIXED);
             }
         }
-        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, dof_whole_eq: whole_eq, layout, whole };
+        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, layout, whole, reach, remeshed: Default::default() };
         Self::build_with(model, time, spec, comm, None, Some(sys), rebuild)
     }
 

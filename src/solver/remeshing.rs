@@ -39,11 +39,21 @@ impl Simulation {
         self.remesh_body_holding(b, h, &hold)
     }
 
+    /// Re-mesh the particles `bodies` now, each as [`Self::remesh_body`] does (in the current
+    /// state, its contact zones held, the quality limits of `[remesh]` not asked), then
+    /// re-equilibrate once. On a process's part of a distributed model `bodies` are the whole
+    /// model's (every process's list alike) and each is re-meshed by its owner. A particle
+    /// that cannot be re-meshed keeps its mesh (a warning says why), and `[remesh]
+    /// max_remeshes` holds. Returns how many were re-meshed. Collective on a part.
+    pub fn remesh_bodies(&mut self, bodies: &[usize]) -> usize {
+        self.remesh_and_rebalance_all(bodies)
+    }
+
     /// The boundary nodes of body `b` (numbered within the body) in contact, as slave or
     /// master, at the last evaluation of the committed state; with the barrier contact, those
     /// within d̂ + [`HOLD_REACH`] h (h the particle's contact length) of another particle or
     /// a wall at the committed state ([`crate::contact::barrier_problem::BarrierContact::near_nodes`]).
-    fn contact_nodes(&mut self, b: usize) -> Vec<usize> {
+    pub(super) fn contact_nodes(&mut self, b: usize) -> Vec<usize> {
         let Some(body) = self.model.bodies.get(b) else { return Vec::new() };
         let (n0, nn) = (body.node_offset, body.mesh.n_nodes());
         if self.barrier.is_some() {
@@ -65,9 +75,9 @@ impl Simulation {
         }
     }
 
-    /// [`Self::remesh_body`] with the boundary nodes `hold` (numbered within the body) kept
-    /// where they are (see [`crate::remesh::remesh_particle_keeping`]).
-    fn remesh_body_holding(&mut self, b: usize, h: f64, hold: &[usize]) -> Result<crate::remesh::BodyTransfer, SolveError> {
+    /// Body `b`'s new mesh in the current state and its state carried over (see
+    /// [`Self::remesh_body`]), the simulation itself unchanged.
+    pub(super) fn remeshed_body(&self, b: usize, h: f64, hold: &[usize]) -> Result<Remeshed, SolveError> {
         let fail = |reason: String| SolveError::Remesh { body: b, reason };
         if self.dynamics.is_some() {
             return Err(fail("implicit dynamics: velocities and accelerations are not transferred".into()));
@@ -94,7 +104,7 @@ impl Simulation {
         // the last step's increment u_n − u_{n−1} of the body goes to the new nodes too
         let incr = crate::remesh::NodalField { n_comp: 2, values: (2 * n0..2 * (n0 + nn)).map(|d| self.sol.u[d] - self.u_prev[d]).collect() };
         let mut moved = crate::remesh::transfer_body(&body.mesh, xb0, xb, &old_state, &[incr], &new_mesh).map_err(|e| fail(e.to_string()))?;
-        let incr_new = moved.nodal.pop().ok_or_else(|| fail("the increment was not transferred".into()))?;
+        let increment = moved.nodal.pop().ok_or_else(|| fail("the increment was not transferred".into()))?;
         if incompressible {
             moved.state.j0.iter_mut().for_each(|j| *j = 1.0);
         }
@@ -103,6 +113,15 @@ impl Simulation {
         let bits = |p: [f64; 2]| p.map(f64::to_bits);
         let new_boundary: HashMap<[u64; 2], usize> = new_mesh.boundary.iter().flatten().map(|&k| (bits(new_mesh.nodes[k]), k)).collect();
         let kept: Vec<Option<usize>> = xb.iter().map(|&p| new_boundary.get(&bits(p)).copied()).collect();
+        Ok(Remeshed { mesh: new_mesh, moved, increment, kept })
+    }
+
+    /// [`Self::remesh_body`] with the boundary nodes `hold` (numbered within the body) kept
+    /// where they are (see [`crate::remesh::remesh_particle_keeping`]).
+    fn remesh_body_holding(&mut self, b: usize, h: f64, hold: &[usize]) -> Result<crate::remesh::BodyTransfer, SolveError> {
+        let fail = |reason: String| SolveError::Remesh { body: b, reason };
+        let Remeshed { mesh: new_mesh, moved, increment: incr_new, kept } = self.remeshed_body(b, h, hold)?;
+        let x = self.coords(&self.sol.u);
         let model = self.model.with_body_mesh(b, new_mesh).map_err(|e| fail(e.to_string()))?;
         // the owners are kept unless the new element counts unbalance them too much
         let owners = self.sys.par.as_ref().map(|p| p.body_owner.as_slice());
@@ -187,7 +206,12 @@ impl Simulation {
         let x = self.coords(&self.sol.u);
         // (smallest scaled Jacobian, body) of every particle that asks for a new mesh
         let mut worst: Vec<(f64, usize)> = Vec::new();
-        for (b, body) in self.model.bodies.iter().enumerate() {
+        // (a part: its own bodies, named by the whole model's numbers)
+        let (n_own, names) = match &self.sys.part {
+            Some(p) => (p.own_bodies, p.bodies.clone()),
+            None => (self.model.bodies.len(), (0..self.model.bodies.len()).collect()),
+        };
+        for (b, body) in self.model.bodies.iter().enumerate().take(n_own) {
             if self.model.remesh_constraint(b).is_some() {
                 continue;
             }
@@ -203,8 +227,8 @@ impl Simulation {
                         }
                     };
                     if worse {
-                        tracing::debug!(body = b, violated = ?q.violated, scaled_jacobian = q.scaled_jacobian.value, aspect_ratio = q.aspect_ratio.value, min_angle = q.min_angle_deg.value, "quality limits crossed");
-                        worst.push((q.scaled_jacobian.value, b));
+                        tracing::debug!(body = names[b], violated = ?q.violated, scaled_jacobian = q.scaled_jacobian.value, aspect_ratio = q.aspect_ratio.value, min_angle = q.min_angle_deg.value, "quality limits crossed");
+                        worst.push((q.scaled_jacobian.value, names[b]));
                     }
                 }
                 Ok(_) => {}
@@ -217,6 +241,13 @@ impl Simulation {
         // the brink of inversion (measured on the 16 octagons of 5.2.1 at φ 0.906: the next
         // step then failed at every step size, 25 Newton iterations stalling on the corner
         // elements of the other particles)
+        if let Some(p) = &self.sys.part {
+            // every process's, to every process (in body order, as the whole model's list)
+            let mine: Vec<f64> = worst.iter().flat_map(|&(q, g)| [q, g as f64]).collect();
+            let all = p.nodes.comm().all_gather_varcount(&mine);
+            worst = all.chunks_exact(2).map(|r| (r[0], r[1] as usize)).collect();
+            worst.sort_by_key(|w| w.1);
+        }
         worst.sort_by(|a, b| a.0.total_cmp(&b.0));
         let bodies: Vec<usize> = worst.iter().map(|&(_, b)| b).collect();
         self.remesh_and_rebalance_all(&bodies)
@@ -249,7 +280,13 @@ impl Simulation {
 
     /// [`Self::remesh_and_rebalance`] for several bodies: each is re-meshed, then the state is
     /// re-equilibrated once. Returns how many were re-meshed.
+    ///
+    /// On a part `bodies` are the whole model's (every process's list alike) and each is
+    /// re-meshed by its owner ([`Self::remesh_parts`]).
     fn remesh_and_rebalance_all(&mut self, bodies: &[usize]) -> usize {
+        if self.sys.part.is_some() {
+            return self.remesh_parts(bodies);
+        }
         let mut done = 0;
         // the contact nodes of every body before the first rebuild (a rebuilt contact problem
         // starts without them; a body's own node numbers do not change when another one is
@@ -338,13 +375,25 @@ impl Simulation {
     }
 }
 
+/// A body's new mesh and its state carried over ([`Simulation::remeshed_body`]).
+pub(super) struct Remeshed {
+    pub mesh: crate::mesh::Mesh,
+    /// The material state on the new mesh.
+    pub moved: crate::remesh::BodyTransfer,
+    /// The last step's increment u_n − u_{n−1} at the new nodes.
+    pub increment: crate::remesh::NodalField,
+    /// Each old node's number in the new mesh where it is kept, bit for bit (the held contact
+    /// zones).
+    pub kept: Vec<Option<usize>>,
+}
+
 /// The ties `ties` (cohering particles) of the contact whose boundary edges were `old` in the
 /// numbering of a re-meshed model whose edges are `new`, with `node_map` the old node → new
 /// node: a tie goes over when its node and its edge's two ends are kept (the re-meshed
 /// particle keeps its contact zones' nodes where they were, and consecutive kept nodes stay an
 /// edge of the new boundary); the others are dropped. Returns the ties and the (node, body)
 /// pairs they hold, sorted.
-fn carry_ties(old: &[crate::contact::Segment], new: &[crate::contact::Segment], ties: &[crate::contact::barrier_problem::Tie], node_map: &[Option<usize>]) -> (Vec<crate::contact::barrier_problem::Tie>, Vec<(usize, usize)>) {
+pub(super) fn carry_ties(old: &[crate::contact::Segment], new: &[crate::contact::Segment], ties: &[crate::contact::barrier_problem::Tie], node_map: &[Option<usize>]) -> (Vec<crate::contact::barrier_problem::Tie>, Vec<(usize, usize)>) {
     let edges: HashMap<[usize; 2], usize> = new.iter().enumerate().map(|(s, seg)| (seg.nodes, s)).collect();
     let map = |n: usize| node_map.get(n).copied().flatten();
     let mut out = Vec::with_capacity(ties.len());

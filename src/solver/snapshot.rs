@@ -15,6 +15,19 @@ use crate::contact::NodalContact;
 use crate::element::N_ENH;
 use crate::model::Model;
 
+/// A part's own bodies' state ([`Simulation::own_state`]): its model (own bodies first, then
+/// its ghosts as they were), and the values of its own nodes and elements.
+pub(super) struct OwnState {
+    pub model: Model,
+    pub u: Vec<f64>,
+    pub u_prev: Vec<f64>,
+    pub dynamics: Option<[Vec<f64>; 4]>,
+    pub fields: ElementFields,
+    pub lambda: Vec<f64>,
+    pub j0: Vec<f64>,
+    pub baseline: Vec<Option<crate::remesh::QualityCheck>>,
+}
+
 /// A converged state as the output reads it (see the module docs).
 pub struct Snapshot<'a> {
     pub model: &'a Model,
@@ -227,6 +240,19 @@ impl Simulation {
         });
         drop(local);
         let areas = crate::parallel::part::gather_records(comm, (0..p.own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, whole.n_bodies, false);
+        // the re-mesh baselines of its own bodies (a checkpoint's): present, then the check
+        let baselines = complete.then(|| {
+            use crate::remesh::monitor::QUALITY_RECORD;
+            let local: Vec<f64> = (0..p.own_bodies)
+                .flat_map(|b| match &self.run.remesh_baseline[b] {
+                    Some(q) => std::iter::once(1.0).chain(q.to_record()).collect::<Vec<f64>>(),
+                    None => vec![0.0; QUALITY_RECORD + 1],
+                })
+                .collect();
+            let records = (0..p.own_bodies).map(|b| (p.bodies[b], &local[b * (QUALITY_RECORD + 1)..(b + 1) * (QUALITY_RECORD + 1)]));
+            crate::parallel::part::gather_records(comm, records, QUALITY_RECORD + 1, whole.n_bodies, false)
+                .map(|all| all.chunks_exact(QUALITY_RECORD + 1).map(|r| if r[0] == 1.0 { crate::remesh::QualityCheck::from_record(&r[1..]) } else { None }).collect::<Vec<_>>())
+        });
         // the ties (cohering particles) in the whole model's numbering, every process's own
         let ties = self.barrier.as_ref().filter(|b| complete && b.tie_stiffness > 0.0).map(|_| {
             let (ties, tied) = self.whole_ties();
@@ -257,7 +283,7 @@ impl Simulation {
             (b.ties, b.tied) = (ties, tied);
         }
         state.scalars.run.area0_body = areas;
-        state.scalars.run.remesh_baseline = vec![None; whole.n_bodies];
+        state.scalars.run.remesh_baseline = baselines.flatten().unwrap_or_else(|| vec![None; whole.n_bodies]);
         Some(Gathered { state, nodal, complete })
     }
 
@@ -323,20 +349,66 @@ impl Simulation {
     /// Not a part, a part that cannot be grown again, or what [`Simulation::new_part`] and
     /// [`Simulation::set_state`] refuse.
     pub fn regrown(&self, time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64) -> Result<Simulation, String> {
+        let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
+        let whole_ties = self.whole_ties();
+        let mut sim = self.grown(self.own_state(), &p.layout.clone(), &[], time, spec, reach, |sim| sim.local_ties(&whole_ties.0, &whole_ties.1))?;
+        sim.sys.partition.repartitions += 1;
+        Ok(sim)
+    }
+
+    /// On a part: its own bodies' state, as [`Self::grown`] takes it.
+    pub(super) fn own_state(&self) -> OwnState {
+        let own_bodies = self.sys.part.as_ref().map_or(self.model.bodies.len(), |p| p.own_bodies);
+        let own_nodes = self.model.bodies.get(own_bodies).map_or(self.model.n_nodes(), |b| b.node_offset);
+        let own_elements = self.model.bodies.get(own_bodies).map_or(self.model.elements.len(), |b| b.elem_offset);
+        let f = &self.sol.fields;
+        let own = ..own_elements;
+        OwnState {
+            model: self.model.clone(),
+            u: self.sol.u[..2 * own_nodes].to_vec(),
+            u_prev: self.u_prev[..2 * own_nodes].to_vec(),
+            dynamics: self.dynamics.as_ref().map(|d| [&d.u, &d.v, &d.a, &d.g].map(|v| v[..2 * own_nodes].to_vec())),
+            fields: ElementFields { states: f.states[own].to_vec(), sig: f.sig[own].to_vec(), pressure: f.pressure[own].to_vec(), theta: f.theta[own].to_vec(), alpha: f.alpha[own].to_vec() },
+            lambda: self.sol.lambda[own].to_vec(),
+            j0: self.sol.j0[own].to_vec(),
+            baseline: self.run.remesh_baseline[..own_bodies].to_vec(),
+        }
+    }
+
+    /// On a part: the simulation of this part grown again from `own` (its own bodies' state,
+    /// [`Self::own_state`], possibly with bodies re-meshed), its bodies laid out by `layout`,
+    /// the ghosts of `stale` sent again by their owners
+    /// ([`crate::parallel::part::RankPart::regrow_with`]), and the ties `ties` gives for the
+    /// new part (its own nodes', in its numbering). The ghosts' displacements come from their
+    /// owners, the bodies' reference areas from every process's own. Collective.
+    ///
+    /// # Errors
+    /// Not a part, a part that cannot be grown again, or what [`Simulation::new_part`] and
+    /// [`Simulation::set_state`] refuse — on every process alike.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn grown(&self, own: OwnState, layout: &std::sync::Arc<crate::parallel::part::BodyLayout>, stale: &[usize], time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64, ties: impl FnOnce(&Simulation) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String>) -> Result<Simulation, String> {
         use crate::parallel::part::{PartView, RankPart};
         let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
-        let x = self.coords(&self.sol.u);
-        let view = PartView { model: &self.model, nodes: &p.nodes, bodies: &p.bodies, n_owned_bodies: p.own_bodies, whole: &p.whole, whole_eq: &p.dof_whole_eq, layout: &p.layout };
-        let part = RankPart::regrow(view, &x, reach).map_err(|e| e.to_string())?;
+        let OwnState { model, u: own_u, u_prev: own_u_prev, dynamics: own_dynamics, fields: own_fields, lambda: own_lambda, j0: own_j0, baseline } = own;
+        let own_bodies = p.own_bodies;
+        let own_nodes = own_u.len() / 2;
+        // the coordinates of every node of the part: its own from `own`, its ghosts' as they are
+        let ghosts_from = self.model.bodies.get(own_bodies).map_or(self.model.n_nodes(), |b| b.node_offset);
+        let x: Vec<[f64; 2]> = (0..own_nodes)
+            .map(|n| [model.x0[n][0] + own_u[2 * n], model.x0[n][1] + own_u[2 * n + 1]])
+            .chain((ghosts_from..self.model.n_nodes()).map(|n| [self.model.x0[n][0] + self.sol.u[2 * n], self.model.x0[n][1] + self.sol.u[2 * n + 1]]))
+            .collect();
+        let view = PartView { model: &model, nodes: &p.nodes, bodies: &p.bodies, n_owned_bodies: own_bodies, layout: &p.layout };
+        let part = RankPart::regrow_with(view, &x, reach, layout, stale).map_err(|e| e.to_string())?;
+        drop(x);
+        drop(model);
         let comm = p.nodes.comm();
-        let (own_nodes, own_bodies) = (p.nodes.n_owned(), p.own_bodies);
-        let own_elements = self.model.bodies.get(own_bodies).map_or(self.model.elements.len(), |b| b.elem_offset);
         let (n_local, ne, nb) = (part.nodes.n_local(), part.model.elements.len(), part.bodies.len());
         // the nodal vectors (displacements, the dynamics' u, v, a, g): its own, then the
         // ghosts' from their owners
-        let mut vectors: Vec<&[f64]> = vec![&self.sol.u, &self.u_prev];
-        if let Some(d) = &self.dynamics {
-            vectors.extend([&d.u[..], &d.v, &d.a, &d.g]);
+        let mut vectors: Vec<&[f64]> = vec![&own_u, &own_u_prev];
+        if let Some(d) = &own_dynamics {
+            vectors.extend(d.iter().map(|v| &v[..]));
         }
         let bs = 2 * vectors.len();
         let mut all = vec![0.0; bs * n_local];
@@ -354,34 +426,35 @@ impl Simulation {
         });
         let (u_prev, u) = (vectors.pop().unwrap_or_default(), vectors.pop().unwrap_or_default());
         // the elements: its own as they are; a ghost's are not read (its owner evaluates it)
-        let (f, mut fields) = (&self.sol.fields, ElementFields::new(ne));
-        let own = ..own_elements;
-        fields.states[own].copy_from_slice(&f.states[own]);
-        fields.sig[own].copy_from_slice(&f.sig[own]);
-        fields.pressure[own].copy_from_slice(&f.pressure[own]);
-        fields.theta[own].copy_from_slice(&f.theta[own]);
-        fields.alpha[own].copy_from_slice(&f.alpha[own]);
+        let mut fields = ElementFields::new(ne);
+        let own = ..own_lambda.len();
+        fields.states[own].copy_from_slice(&own_fields.states);
+        fields.sig[own].copy_from_slice(&own_fields.sig);
+        fields.pressure[own].copy_from_slice(&own_fields.pressure);
+        fields.theta[own].copy_from_slice(&own_fields.theta);
+        fields.alpha[own].copy_from_slice(&own_fields.alpha);
         let (mut lambda, mut j0) = (vec![0.0; ne], vec![1.0; ne]);
-        lambda[own].copy_from_slice(&self.sol.lambda[own]);
-        j0[own].copy_from_slice(&self.sol.j0[own]);
+        lambda[own].copy_from_slice(&own_lambda);
+        j0[own].copy_from_slice(&own_j0);
         let sol = Solution { time: self.sol.time, u, fields, lambda, j0 };
         // the bodies' reference areas: every process's own, to every process
-        let area = crate::parallel::part::gather_records(comm, (0..own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, p.layout.owner.len(), true).unwrap_or_default();
+        let area = crate::parallel::part::gather_records(comm, (0..own_bodies).map(|b| (p.bodies[b], std::slice::from_ref(&self.run.area0_body[b]))), 1, layout.owner.len(), true).unwrap_or_default();
         let mut scalars = self.scalars();
         scalars.run.area0_body = part.bodies.iter().map(|&b| area.get(b).copied().unwrap_or(f64::NAN)).collect();
-        scalars.run.remesh_baseline = vec![None; nb];
-        scalars.partition.repartitions += 1;
-        let whole_ties = self.whole_ties();
+        scalars.run.remesh_baseline = baseline.into_iter().chain(std::iter::repeat(None)).take(nb).collect();
         let mut sim = Simulation::part_simulation(part, time, spec, true).map_err(|e: SolveError| e.to_string())?;
         // its ties (on its own nodes) in the new part's numbering of the edges and bodies
         if let Some(b) = scalars.barrier.as_mut() {
-            let ties = sim.local_ties(&whole_ties.0, &whole_ties.1);
+            let ties = ties(&sim);
             if sim.sys.any(ties.is_err()) {
                 return Err(ties.err().unwrap_or_else(|| "barrier ties: another process's do not fit its new part".into()));
             }
             (b.ties, b.tied) = ties?;
         }
-        sim.set_state(SimState { scalars, sol, u_prev, dynamics })?;
+        let set = sim.set_state(SimState { scalars, sol, u_prev, dynamics });
+        if sim.sys.any(set.is_err()) {
+            return Err(set.err().unwrap_or_else(|| "the state of another process's new part does not fit it".into()));
+        }
         Ok(sim)
     }
 

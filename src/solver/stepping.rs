@@ -190,15 +190,20 @@ impl Simulation {
             let partial = stabilised && !self.springs.all && stab.scope == Stabilise::Unsupported;
             let inertial = stabilised && !self.springs.viscous && stab.viscous_retry && stab.kind == StabilisationKind::Inertial;
             let inverted = match &result {
-                Err(NewtonFailure::Element(e)) if self.model.remesh.enabled && !remesh_tried => self.model.elem_body.get(e.element).copied(),
+                Err(NewtonFailure::Element(e)) if self.model.remesh.enabled && !remesh_tried => Some(e.element),
                 _ => None,
             };
-            if let Some(b) = inverted {
+            if let Some(e) = inverted {
                 // an element inverted: re-mesh its particle (in the last converged state) and
                 // retry the same step before any cut-back, when its mesh there is already
-                // poor (a new mesh of a good mesh does not help: the step was too large)
+                // poor (a new mesh of a good mesh does not help: the step was too large; on
+                // a part the element is the whole model's, and its owner decides)
                 remesh_tried = true;
-                if self.model.remesh_constraint(b).is_none() && self.mesh_is_poor(b) {
+                let body = match self.sys.part.is_some() {
+                    true => self.part_body_to_remesh(e),
+                    false => self.model.elem_body.get(e).copied().filter(|&b| self.model.remesh_constraint(b).is_none() && self.mesh_is_poor(b)),
+                };
+                if let Some(b) = body {
                     tracing::info!(time = self.sol.time, dt = dt_try, body = b, "an element inverted: re-meshing the particle and retrying the step");
                     if self.remesh_and_rebalance(b) {
                         remeshes += 1;

@@ -63,11 +63,13 @@ pub(super) struct PartSys {
     /// The whole model's equation of each of the part's equations (for what is defined on the
     /// whole model's equations: the saddle's pseudo-random start).
     pub eq_whole: Vec<usize>,
-    /// The whole model's equation of each of the part's dofs ([`crate::assembly::FIXED`]
-    /// for a prescribed one): what a part grown again takes for its own dofs.
-    pub dof_whole_eq: Vec<usize>,
     /// Every body's owner, size and place in the whole model (to grow the part again).
     pub layout: Arc<crate::parallel::part::BodyLayout>,
+    /// The reach of its ghosts (mm; a re-mesh grows the part again with it).
+    pub reach: f64,
+    /// On rank 0: the bodies re-meshed (whole model's body, new mesh) since the output took
+    /// them last ([`super::Simulation::take_remeshed`]), in the order they were re-meshed.
+    pub remeshed: std::sync::Mutex<Vec<(usize, crate::mesh::Mesh)>>,
     /// The whole model's node and element of each of the part's nodes and elements (to name
     /// a failed element, to gather the output).
     pub whole: crate::model::PartMap,
