@@ -158,7 +158,7 @@ impl Simulation {
         let stale: Vec<usize> = resized.iter().map(|r| r.0).collect();
 
         // its own bodies with their new meshes, and their state (the others' as the whole
-        // model's re-mesh keeps it: displacements, material states, stresses, j₀ and λ)
+        // model's re-mesh keeps it: displacements and every element field)
         let mut model = self.model.clone();
         for (k, g, r) in &made {
             model = model.with_body_mesh(*k, r.mesh.clone()).map_err(|e| Failed::Unnamed(format!("body {g}: {e}")))?;
@@ -191,8 +191,12 @@ impl Simulation {
             u[dst..dst + n].copy_from_slice(&self.sol.u[src..src + n]);
             u_prev[dst..dst + n].copy_from_slice(&self.u_prev[src..src + n]);
             let (src, dst, n) = (ob.elem_offset, nb.elem_offset, ob.mesh.n_elements());
-            fields.states[dst..dst + n].copy_from_slice(&self.sol.fields.states[src..src + n]);
-            fields.sig[dst..dst + n].copy_from_slice(&self.sol.fields.sig[src..src + n]);
+            let g = &self.sol.fields;
+            fields.states[dst..dst + n].copy_from_slice(&g.states[src..src + n]);
+            fields.sig[dst..dst + n].copy_from_slice(&g.sig[src..src + n]);
+            fields.pressure[dst..dst + n].copy_from_slice(&g.pressure[src..src + n]);
+            fields.theta[dst..dst + n].copy_from_slice(&g.theta[src..src + n]);
+            fields.alpha[dst..dst + n].copy_from_slice(&g.alpha[src..src + n]);
             j0[dst..dst + n].copy_from_slice(&self.sol.j0[src..src + n]);
             lambda[dst..dst + n].copy_from_slice(&self.sol.lambda[src..src + n]);
         }

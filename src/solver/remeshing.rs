@@ -145,8 +145,16 @@ impl Simulation {
             next.sol.u[dst..dst + n].copy_from_slice(&self.sol.u[src..src + n]);
             next.u_prev[dst..dst + n].copy_from_slice(&self.u_prev[src..src + n]);
             let (src, dst, n) = (ob.elem_offset, nb.elem_offset, ob.mesh.n_elements());
-            next.sol.fields.states[dst..dst + n].copy_from_slice(&self.sol.fields.states[src..src + n]);
-            next.sol.fields.sig[dst..dst + n].copy_from_slice(&self.sol.fields.sig[src..src + n]);
+            // (every field, the element pressures too: a particle re-meshed after this one in
+            // the same step transfers its pressures from them — they were left at zero, and the
+            // 16 incompressible octagons of the 5.2.1 job re-meshed together then started their
+            // re-equilibration at a relative residual of 1.0 instead of 0.42)
+            let (f, g) = (&mut next.sol.fields, &self.sol.fields);
+            f.states[dst..dst + n].copy_from_slice(&g.states[src..src + n]);
+            f.sig[dst..dst + n].copy_from_slice(&g.sig[src..src + n]);
+            f.pressure[dst..dst + n].copy_from_slice(&g.pressure[src..src + n]);
+            f.theta[dst..dst + n].copy_from_slice(&g.theta[src..src + n]);
+            f.alpha[dst..dst + n].copy_from_slice(&g.alpha[src..src + n]);
             next.sol.j0[dst..dst + n].copy_from_slice(&self.sol.j0[src..src + n]);
             next.sol.lambda[dst..dst + n].copy_from_slice(&self.sol.lambda[src..src + n]);
         }
