@@ -338,23 +338,28 @@ fn model_with_a_remeshed_body() {
 /// columns are an unstable equilibrium, and the re-meshed disc breaks their mirror symmetry.
 /// At the job's own 4 mm the forces differ by 1.4 % (a coarse re-mesh is a different
 /// discretisation), at 6 mm by 5 %.
+/// Two simulations of case `c` advanced step by step together until the solid ratio reaches
+/// `phi` (one to be re-meshed, one to compare with), and the solid ratio they reached.
+fn twins_at(c: &mpfem::case::Case, phi: f64) -> (mpfem::solver::Simulation, mpfem::solver::Simulation, f64) {
+    let mk = || mpfem::solver::Simulation::new(mpfem::model::Model::from_case(c).unwrap(), c.time, c.solver).unwrap();
+    let (mut a, mut b) = (mk(), mk());
+    let mut reached = 0.0;
+    while reached < phi {
+        reached = a.advance(c.time.dt).unwrap().compaction.unwrap().solid_ratio;
+        b.advance(c.time.dt).unwrap();
+    }
+    (a, b, reached)
+}
+
 #[test]
 fn remeshing_a_disc_mid_run_keeps_the_wall_forces() {
     use mpfem::case;
-    use mpfem::model::Model;
     use mpfem::solver::Simulation;
     let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
     let path = std::env::temp_dir().join(format!("remesh_mid_run_{}.toml", std::process::id()));
     std::fs::write(&path, text.replace("mesh_size = 4.0", "mesh_size = 2.0")).unwrap();
     let c = case::load(&path).unwrap();
-    let mk = || Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
-    let (mut a, mut b) = (mk(), mk());
-    let mut phi = 0.0;
-    while phi < 0.85 {
-        let ra = a.advance(c.time.dt).unwrap();
-        b.advance(c.time.dt).unwrap();
-        phi = ra.compaction.unwrap().solid_ratio;
-    }
+    let (mut a, mut b, phi) = twins_at(&c, 0.85);
     let areas_before = b.model.body_areas(&b.coords(&b.sol.u));
     // the disc's stabilisation springs, summed: ζ E A / h² per direction with the particle's
     // own h, whatever its mesh (they were stiffened by the finer new mesh before)
@@ -721,8 +726,6 @@ dt = 0.1
 #[test]
 fn remeshing_with_the_barrier_holds_the_contact_zones() {
     use mpfem::case;
-    use mpfem::model::Model;
-    use mpfem::solver::Simulation;
     for cohering in [false, true] {
         let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
         let contact = if cohering { "contact = \"cohering\"" } else { "contact = \"sliding\"" };
@@ -732,14 +735,7 @@ fn remeshing_with_the_barrier_holds_the_contact_zones() {
         std::fs::write(&path, text).unwrap();
         let c = case::load(&path).unwrap();
         let _ = std::fs::remove_file(&path);
-        let mk = || Simulation::new(Model::from_case(&c).unwrap(), c.time, c.solver).unwrap();
-        let (mut a, mut b) = (mk(), mk());
-        let mut phi = 0.0;
-        while phi < 0.85 {
-            let ra = a.advance(c.time.dt).unwrap();
-            b.advance(c.time.dt).unwrap();
-            phi = ra.compaction.unwrap().solid_ratio;
-        }
+        let (mut a, mut b, phi) = twins_at(&c, 0.85);
         let ties_before = b.barrier_ties().unwrap().0;
         assert!(!cohering || ties_before > 0, "no tie before the re-mesh");
         let kappa = b.state().scalars.barrier.unwrap().kappa;

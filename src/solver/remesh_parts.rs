@@ -78,13 +78,8 @@ impl Simulation {
                 }
             }
         }
-        if done == 0 {
-            return 0;
-        }
-        let _t = self.clock.scope(Phase::Reequilibration);
-        match self.equilibrate() {
-            Ok(its) => tracing::debug!(iterations = its, "re-equilibrated after re-meshing"),
-            Err(e) => tracing::warn!(%e, "re-equilibration after re-meshing failed: the next step starts from the transferred state"),
+        if done > 0 {
+            self.reequilibrate_after_remesh();
         }
         done
     }

@@ -328,15 +328,20 @@ impl Simulation {
             self.run.remesh_baseline[b] = q;
             tracing::info!(time = self.sol.time, body = b, name = %body.name, elements = body.mesh.n_elements(), area_change = moved.area.relative_change, "particle re-meshed");
         }
-        if done == 0 {
-            return 0;
+        if done > 0 {
+            self.reequilibrate_after_remesh();
         }
+        done
+    }
+
+    /// After particles were re-meshed: [`Self::equilibrate`], a failure left for the next step
+    /// to balance (a warning says so).
+    pub(super) fn reequilibrate_after_remesh(&mut self) {
         let _t = self.clock.scope(Phase::Reequilibration);
         match self.equilibrate() {
             Ok(its) => tracing::debug!(iterations = its, "re-equilibrated after re-meshing"),
             Err(e) => tracing::warn!(%e, "re-equilibration after re-meshing failed: the next step starts from the transferred state"),
         }
-        done
     }
 
     /// Bring the state back into equilibrium at the current time and wall positions (after a
