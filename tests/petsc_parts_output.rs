@@ -371,6 +371,12 @@ fn remeshing_parts_write_the_serial_results_and_restart() {
     let cells = |s: &str| file.dataset(&format!("steps/{s}/cells")).expect("cells").shape()[0];
     assert_ne!(cells("000002"), cells("000004"), "the output after the re-mesh has the old mesh");
     println!("re-meshing on 2 ranks: {remeshes} re-meshes, {} then {} elements; history {worst:.2e}, results.h5 {results:.2e} over {n} datasets", cells("000002"), cells("000004"));
+    // the parts' partition as summary.json reports it: nine discs of equal element counts (all
+    // re-meshed alike) on 2 ranks, five on one, and close pairs split between them
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(two.join("summary.json")).expect("summary.json")).expect("json");
+    let p = &summary["run"]["partition"];
+    let (imbalance, cut) = (p["imbalance"].as_f64().expect("imbalance"), p["edge_cut"].as_u64().expect("edge cut"));
+    assert!((imbalance - 10.0 / 9.0).abs() < 1e-12 && cut > 0, "run.partition on the parts: {p}");
     // the 2-rank checkpoint after the re-mesh (step 5, with the new meshes' quality as their
     // re-mesh baselines: without them the restart re-meshed three discs again) on 3 ranks; the
     // serial one on 2, and serially

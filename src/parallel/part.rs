@@ -111,6 +111,10 @@ pub struct BodyLayout {
     /// last): the whole model's equation of a body's free dof is its whole dof less those and
     /// its own prescribed dofs before it ([`crate::assembly::number_equations`]).
     pub fixed_before: Vec<usize>,
+    /// Close pairs of bodies (edges of the particle graph of the reference configuration,
+    /// [`crate::distribute::particle_graph`]) owned by different processes, when the parts
+    /// were first made.
+    pub edge_cut: usize,
 }
 
 /// A body's new sizes after a re-mesh: (body, nodes, elements, boundary edges).
@@ -128,7 +132,24 @@ impl BodyLayout {
                 fixed[k - 1] += 1;
             }
         }
-        Self::from_sizes(owner.to_vec(), b.iter().map(|b| (b.mesh.n_nodes(), b.mesh.n_elements(), b.mesh.boundary.len())).collect(), &fixed)
+        let mut layout = Self::from_sizes(owner.to_vec(), b.iter().map(|b| (b.mesh.n_nodes(), b.mesh.n_elements(), b.mesh.boundary.len())).collect(), &fixed);
+        layout.edge_cut = crate::distribute::particle_graph(whole).map_or(0, |g| if g.n_vertices() == owner.len() { partition::edge_cut(&g, owner) } else { 0 });
+        layout
+    }
+
+    /// The heaviest process's element count over the mean of `ranks` processes.
+    pub fn imbalance(&self, ranks: usize) -> f64 {
+        let mut load = vec![0usize; ranks.max(1)];
+        for (&o, &n) in self.owner.iter().zip(&self.n_elements) {
+            if let Some(l) = load.get_mut(o) {
+                *l += n;
+            }
+        }
+        let total: usize = load.iter().sum();
+        if total == 0 {
+            return 1.0;
+        }
+        load.iter().copied().max().unwrap_or(0) as f64 * load.len() as f64 / total as f64
     }
 
     /// The layout of bodies owned by `owner` with `sizes` (nodes, elements, boundary edges)
@@ -153,7 +174,7 @@ impl BodyLayout {
                 Some(*at)
             }))
             .collect();
-        Self { owner, n_nodes: sizes.iter().map(|s| s.0).collect(), node_offset, elem_offset, segment_offset, n_elements: sizes.iter().map(|s| s.1).collect(), fixed_before }
+        Self { owner, n_nodes: sizes.iter().map(|s| s.0).collect(), node_offset, elem_offset, segment_offset, n_elements: sizes.iter().map(|s| s.1).collect(), fixed_before, edge_cut: 0 }
     }
 
     /// This layout with the bodies of `resized` re-meshed to their new sizes (every body after
@@ -166,7 +187,7 @@ impl BodyLayout {
             }
         }
         let fixed: Vec<usize> = self.fixed_before.windows(2).map(|w| w[1] - w[0]).collect();
-        Self::from_sizes(self.owner.clone(), sizes, &fixed)
+        Self { edge_cut: self.edge_cut, ..Self::from_sizes(self.owner.clone(), sizes, &fixed) }
     }
 
     /// The body holding the whole model's element `e` (None past the last).

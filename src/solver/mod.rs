@@ -264,8 +264,11 @@ impl Simulation {
 
     fn build_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>, part: Option<system::PartSys>, rebuild: bool) -> Result<Self, SolveError> {
         let mut partition = previous.map_or_else(PartitionStats::default, |p| p.1.clone());
-        let par = if part.is_some() {
+        let par = if let Some(p) = &part {
+            // (a part: its owners are fixed for the run; the imbalance follows the re-meshes)
             partition.ranks = comm.size();
+            partition.imbalance = p.layout.imbalance(comm.size());
+            partition.edge_cut = p.layout.edge_cut;
             None
         } else {
             Distribution::build(&model, comm.clone(), previous.and_then(|p| p.0), spec.repartition_imbalance, &mut partition)
