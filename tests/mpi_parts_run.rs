@@ -85,8 +85,30 @@ fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
     let cohering = case.replace("contact = \"sliding\"", "contact = \"cohering\"");
     assert_ne!(cohering, case);
     let tied = cohering_grown_again(comm.clone(), &cohering);
-    let remeshed = cohering_remeshed(comm, &cohering);
+    let remeshed = cohering_remeshed(comm.clone(), &cohering);
+    held_particle_left_out(comm, &case);
     format!("{frictionless}; with friction 0.2: {rubbing}; cohering, grown again: {tied}; cohering, re-meshed: {remeshed}")
+}
+
+/// A particle that holds a probe is not re-meshed (its node numbers would lose their meaning):
+/// asked to re-mesh it and another, the parts re-mesh the other only — every process alike,
+/// none waiting for another — as the whole model does, and the run goes on.
+fn held_particle_left_out(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) {
+    let rank = comm.rank();
+    let text = text.replace("[output]\n", "[output]\nprobes = [{ name = \"centre\", body = \"g0_p4\", node = 0 }]\n");
+    assert!(text.contains("probes"), "the case has no [output] table");
+    let case = mpfem::case::parse(&text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    let mut serial = Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation");
+    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
+    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    for s in [&mut serial, &mut sim] {
+        for _ in 0..2 {
+            s.advance(case.time.dt).expect("a step");
+        }
+        assert_eq!(s.remesh_bodies(&[4, 0]), 1, "rank {rank}: the disc with the probe re-meshed, or the other not");
+        s.advance(case.time.dt).expect("the step after the re-mesh");
+    }
 }
 
 /// The cohering run on parts with every disc re-meshed after step 4 (`Simulation::remesh_bodies`,

@@ -124,7 +124,12 @@ impl Simulation {
         let mut failed_here = Vec::new();
         for (&(k, g), hold) in own.iter().zip(&holds) {
             let h = self.model.remesh.mesh_size.unwrap_or(self.model.bodies[k].mesh_size);
-            match self.remeshed_body(k, h, hold) {
+            // (a particle held by boundary conditions, loads or output groups is not re-meshed)
+            let made_here = match self.model.remesh_constraint(k) {
+                Some(what) => Err(super::SolveError::Remesh { body: g, reason: format!("held by {what}") }),
+                None => self.remeshed_body(k, h, hold),
+            };
+            match made_here {
                 Ok(r) => made.push((k, g, r)),
                 Err(e) => {
                     tracing::debug!(body = g, %e, "re-meshing failed");
@@ -155,8 +160,19 @@ impl Simulation {
         // its own bodies with their new meshes, and their state (the others' as the whole
         // model's re-mesh keeps it: displacements and every element field)
         let mut model = self.model.clone();
+        let mut problem = None;
         for (k, g, r) in &made {
-            model = model.with_body_mesh(*k, r.mesh.clone()).map_err(|e| Failed::Unnamed(format!("body {g}: {e}")))?;
+            match model.with_body_mesh(*k, r.mesh.clone()) {
+                Ok(m) => model = m,
+                Err(e) => {
+                    problem = Some(format!("body {g}: {e}"));
+                    break;
+                }
+            }
+        }
+        // (agreed before the collective calls that follow)
+        if self.sys.any(problem.is_some()) {
+            return Err(Failed::Unnamed(problem.unwrap_or_else(|| "a new mesh on another process".into())));
         }
         // (the whole model's largest reference coordinate: a re-meshed body's reference is
         // its current configuration)
