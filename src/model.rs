@@ -498,18 +498,36 @@ impl Model {
     /// [`ModelError::RemeshConstrained`] when prescribed displacements, loads or output groups
     /// refer to nodes of body `b` (they are defined on its old boundary edge sets).
     pub fn with_body_mesh(&self, b: usize, mesh: Mesh) -> Result<Model, ModelError> {
-        let old = self.bodies.get(b).ok_or(ModelError::NoBody(b))?;
-        if let Some(what) = self.remesh_constraint(b) {
-            return Err(ModelError::RemeshConstrained { body: old.name.clone(), what });
+        self.with_body_meshes(vec![(b, mesh)])
+    }
+
+    /// [`Model::with_body_mesh`] for several bodies at once (each listed once), renumbered
+    /// once.
+    ///
+    /// # Errors
+    /// As [`Model::with_body_mesh`], for the first body that fails; [`ModelError::NoBody`]
+    /// for a body listed twice.
+    pub fn with_body_meshes(&self, meshes: Vec<(usize, Mesh)>) -> Result<Model, ModelError> {
+        let mut remeshed = vec![false; self.bodies.len()];
+        for (b, _) in &meshes {
+            let old = self.bodies.get(*b).ok_or(ModelError::NoBody(*b))?;
+            if let Some(what) = self.remesh_constraint(*b) {
+                return Err(ModelError::RemeshConstrained { body: old.name.clone(), what });
+            }
+            if std::mem::replace(&mut remeshed[*b], true) {
+                return Err(ModelError::NoBody(*b));
+            }
         }
         let mut new = self.clone();
-        new.bodies[b].mesh = mesh;
+        for (b, mesh) in meshes {
+            new.bodies[b].mesh = mesh;
+        }
         let (mut x0, mut elements, mut elem_material, mut elem_body) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         // old global node -> new global node, for the nodes of the other bodies
         let mut renumber = vec![usize::MAX; self.x0.len()];
         for (ib, body) in new.bodies.iter_mut().enumerate() {
             let (node_offset, elem_offset) = (x0.len(), elements.len());
-            if ib == b {
+            if remeshed[ib] {
                 x0.extend_from_slice(&body.mesh.nodes);
             } else {
                 let n = body.mesh.n_nodes();

@@ -987,8 +987,10 @@ fn part_output_due(step: usize, every: usize, probes: bool, signal: usize, check
 /// A new mesh the whole model does not take (the output then shows the old one).
 fn put_remeshed(whole: &mut Option<Model>, sim: &Simulation) -> Result<(), String> {
     let Some(w) = whole.as_mut() else { return Ok(()) };
-    for (g, mesh) in sim.take_remeshed() {
-        *w = w.with_body_mesh(g, mesh).map_err(|e| format!("the output's model: particle {g}'s new mesh: {e}"))?;
+    // (a particle re-meshed twice since: its last mesh)
+    let last: std::collections::BTreeMap<usize, crate::mesh::Mesh> = sim.take_remeshed().into_iter().collect();
+    if !last.is_empty() {
+        *w = w.with_body_meshes(last.into_iter().collect()).map_err(|e| format!("the output's model: the re-meshed particles' new meshes: {e}"))?;
     }
     Ok(())
 }

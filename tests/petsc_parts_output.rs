@@ -180,6 +180,16 @@ fn stopped_at(from: &Path, to: &Path, step: usize) {
     std::fs::write(to.join("history.csv"), kept.join("\n") + "\n").unwrap();
 }
 
+/// The checkpoint of the run in `from` (written at `step`, its last) continued in `to` with
+/// `case` on `ranks` ranks (serially with None), with `--allow-case-change` when `changed`
+/// (a checkpoint written with another case).
+fn restarted(from: &Path, step: usize, to: &Path, case: &Path, ranks: Option<usize>, changed: bool) {
+    stopped_at(from, to, step);
+    let restart = to.to_str().unwrap();
+    let args: Vec<&str> = if changed { vec!["--quiet", "--allow-case-change", "--restart", restart] } else { vec!["--quiet", "--restart", restart] };
+    run(case, ranks, to, &args);
+}
+
 /// The MPI tests' 3 × 3 case with the barrier and faer (`edit` applied to it) written as
 /// `serial.toml` in `dir`, and the same with `linear = "petsc"` as `parts.toml`; asserts that
 /// each of `made` is in the edited case.
@@ -213,14 +223,12 @@ fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
 
     // the 2-rank checkpoint (step 4) on 3 ranks
     let three = dir.join("three");
-    stopped_at(&two, &three, 4);
-    run(&parts_case, Some(3), &three, &["--quiet", "--restart", three.to_str().unwrap()]);
+    restarted(&two, 4, &three, &parts_case, Some(3), false);
     let worst = history_difference(&serial, &three, "2 ranks' checkpoint on 3");
     println!("the 2-rank checkpoint continued on 3 ranks: {worst:.2e} from the serial run");
     // the serial run's checkpoint (step 4, the whole model) on 2 ranks' parts
     let from_serial = dir.join("from-serial");
-    stopped_at(&serial, &from_serial, 4);
-    run(&parts_case, Some(2), &from_serial, &["--quiet", "--allow-case-change", "--restart", from_serial.to_str().unwrap()]);
+    restarted(&serial, 4, &from_serial, &parts_case, Some(2), true);
     let worst = history_difference(&serial, &from_serial, "the serial checkpoint on 2 ranks");
     println!("the serial checkpoint continued on 2 ranks: {worst:.2e} from the serial run");
     let _ = std::fs::remove_dir_all(&dir);
@@ -301,8 +309,7 @@ fn implicit_dynamics_on_parts_follows_the_serial_run() {
     println!("dynamics on parts, 2 ranks: history {worst:.2e}, results.h5 {results:.2e} over {n} datasets (kinetic energy up to {kinetic:.3e}, walls' work {work:.3e})");
     // the 2-rank checkpoint (step 3 of 4: u, v, a, g of every node) on 3 ranks
     let three = dir.join("three");
-    stopped_at(&two, &three, 3);
-    run(&parts_case, Some(3), &three, &["--quiet", "--restart", three.to_str().unwrap()]);
+    restarted(&two, 3, &three, &parts_case, Some(3), false);
     let worst = history_difference_but(&serial, &three, "the dynamic 2-rank checkpoint on 3", &VOLUMES);
     println!("the dynamic 2-rank checkpoint continued on 3 ranks: {worst:.2e} from the serial run");
 
@@ -339,12 +346,10 @@ fn cohering_parts_write_and_restart_their_ties() {
     println!("cohering on 2 ranks: {tied} tied nodes, history {worst:.2e}, results.h5 {results:.2e} over {n} datasets");
     // the 2-rank checkpoint (step 5 of 8, ties in the whole model's numbering) on 3 ranks
     let three = dir.join("three");
-    stopped_at(&two, &three, 5);
-    run(&parts_case, Some(3), &three, &["--quiet", "--restart", three.to_str().unwrap()]);
+    restarted(&two, 5, &three, &parts_case, Some(3), false);
     let worst = history_difference_but(&serial, &three, "the cohering 2-rank checkpoint on 3", &VOLUMES);
     let from_serial = dir.join("from-serial");
-    stopped_at(&serial, &from_serial, 5);
-    run(&parts_case, Some(2), &from_serial, &["--quiet", "--allow-case-change", "--restart", from_serial.to_str().unwrap()]);
+    restarted(&serial, 5, &from_serial, &parts_case, Some(2), true);
     let worst_serial = history_difference_but(&serial, &from_serial, "the cohering serial checkpoint on 2 ranks", &VOLUMES);
     println!("cohering checkpoints continued: 2 ranks' on 3 {worst:.2e}, the serial one on 2 {worst_serial:.2e}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -381,16 +386,13 @@ fn remeshing_parts_write_the_serial_results_and_restart() {
     // re-mesh baselines: without them the restart re-meshed three discs again) on 3 ranks; the
     // serial one on 2, and serially
     let three = dir.join("three");
-    stopped_at(&two, &three, 5);
-    run(&parts_case, Some(3), &three, &["--quiet", "--restart", three.to_str().unwrap()]);
+    restarted(&two, 5, &three, &parts_case, Some(3), false);
     let on_three = history_difference(&serial, &three, "the re-meshed 2-rank checkpoint on 3");
     let from_serial = dir.join("from-serial");
-    stopped_at(&serial, &from_serial, 5);
-    run(&parts_case, Some(2), &from_serial, &["--quiet", "--allow-case-change", "--restart", from_serial.to_str().unwrap()]);
+    restarted(&serial, 5, &from_serial, &parts_case, Some(2), true);
     let on_two = history_difference(&serial, &from_serial, "the re-meshed serial checkpoint on 2 ranks");
     let again = dir.join("serial-again");
-    stopped_at(&serial, &again, 5);
-    run(&serial_case, None, &again, &["--quiet", "--restart", again.to_str().unwrap()]);
+    restarted(&serial, 5, &again, &serial_case, None, false);
     let serially = history_difference(&serial, &again, "the re-meshed serial checkpoint serially");
     println!("re-meshed checkpoints continued: 2 ranks' on 3 {on_three:.2e}, the serial one on 2 {on_two:.2e}, serially {serially:.2e}");
     let _ = std::fs::remove_dir_all(&dir);

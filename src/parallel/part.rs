@@ -315,9 +315,9 @@ impl RankPart {
         let nodes = IndexMap::new(comm, n_owned_nodes, ghost_nodes)?;
         let bodies: Vec<usize> = owned.iter().chain(&ghosts).copied().collect();
         let (model, map) = whole.part(&bodies, owned.len())?;
-        let (eq, _) = crate::assembly::number_equations(whole.n_dofs(), whole.loading.prescribed.iter().map(|p| p.dof));
-        let whole_eq = map.node.iter().flat_map(|&n| [eq[2 * n], eq[2 * n + 1]]).collect();
-        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq, layout: Arc::new(BodyLayout::new(whole, owner)), reach })
+        let layout = Arc::new(BodyLayout::new(whole, owner));
+        let whole_eq = whole_equations(&model, &bodies, owned.len(), &layout, &nodes);
+        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq, layout, reach })
     }
 
     /// This part's fields as [`RankPart::regrow`] reads them.
@@ -428,29 +428,7 @@ impl RankPart {
             whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
             whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
         }
-        // the whole equations of its own dofs from the layout, the ghosts' from their owners
-        // (−1: prescribed)
-        let mut eq = vec![-1.0; 2 * nodes.n_local()];
-        let prescribed = &model.loading.prescribed;
-        let mut at = 0;
-        for (b, &g) in model.bodies[..n_own].iter().zip(&bodies) {
-            let first = 2 * b.node_offset;
-            let base = 2 * layout.node_offset[g] - layout.fixed_before[g];
-            let mut fixed_here = 0;
-            for d in first..first + 2 * b.mesh.n_nodes() {
-                while at < prescribed.len() && prescribed[at].dof < d {
-                    at += 1;
-                }
-                if at < prescribed.len() && prescribed[at].dof == d {
-                    fixed_here += 1;
-                } else {
-                    eq[d] = (base + d - first - fixed_here) as f64;
-                }
-            }
-        }
-        nodes.forward(&mut eq, 2);
-        let fixed = crate::assembly::FIXED;
-        let whole_eq = eq.iter().map(|&q| if q < 0.0 { fixed } else { q as usize }).collect();
+        let whole_eq = whole_equations(&model, &bodies, n_own, layout, &nodes);
         Ok(Self { model, bodies, n_owned_bodies: n_own, nodes, whole, whole_eq, layout: Arc::clone(layout), reach })
     }
 
@@ -647,6 +625,37 @@ fn read_ghost(at: &mut &[f64]) -> Result<GhostBody, String> {
         .collect::<Result<Vec<_>, String>>()?;
     let mesh = Mesh { nodes, elements, boundary, edge_sets };
     Ok(GhostBody { body: Body { name, mesh, material, node_offset: 0, elem_offset: 0, mesh_size, contact_h }, x0, prescribed })
+}
+
+/// The whole model's equation of each dof of a part (`model`, whose bodies are the whole
+/// model's `bodies`, the first `n_own` its own; `nodes` its node map), as
+/// [`crate::assembly::number_equations`] numbers the whole model's free dofs
+/// ([`crate::assembly::FIXED`] for a prescribed one): its own from the layout (a free dof's
+/// equation is its whole dof less the prescribed dofs before it), the ghosts' from their
+/// owners. Collective.
+fn whole_equations(model: &Model, bodies: &[usize], n_own: usize, layout: &BodyLayout, nodes: &IndexMap) -> Vec<usize> {
+    // (−1: prescribed, or a ghost's before the exchange)
+    let mut eq = vec![-1.0; 2 * nodes.n_local()];
+    let prescribed = &model.loading.prescribed;
+    let mut at = 0;
+    for (b, &g) in model.bodies[..n_own].iter().zip(bodies) {
+        let first = 2 * b.node_offset;
+        let base = 2 * layout.node_offset[g] - layout.fixed_before[g];
+        let mut fixed_here = 0;
+        for d in first..first + 2 * b.mesh.n_nodes() {
+            while at < prescribed.len() && prescribed[at].dof < d {
+                at += 1;
+            }
+            if at < prescribed.len() && prescribed[at].dof == d {
+                fixed_here += 1;
+            } else {
+                eq[d] = (base + d - first - fixed_here) as f64;
+            }
+        }
+    }
+    nodes.forward(&mut eq, 2);
+    let fixed = crate::assembly::FIXED;
+    eq.iter().map(|&q| if q < 0.0 { fixed } else { q as usize }).collect()
 }
 
 /// Every process's `bodies` (whole model's body, its [`GhostBody`]) on rank 0, in body order;

@@ -159,21 +159,12 @@ impl Simulation {
 
         // its own bodies with their new meshes, and their state (the others' as the whole
         // model's re-mesh keeps it: displacements and every element field)
-        let mut model = self.model.clone();
-        let mut problem = None;
-        for (k, g, r) in &made {
-            match model.with_body_mesh(*k, r.mesh.clone()) {
-                Ok(m) => model = m,
-                Err(e) => {
-                    problem = Some(format!("body {g}: {e}"));
-                    break;
-                }
-            }
-        }
+        let model = self.model.with_body_meshes(made.iter().map(|(k, _, r)| (*k, r.mesh.clone())).collect());
         // (agreed before the collective calls that follow)
-        if self.sys.any(problem.is_some()) {
-            return Err(Failed::Unnamed(problem.unwrap_or_else(|| "a new mesh on another process".into())));
+        if self.sys.any(model.is_err()) {
+            return Err(Failed::Unnamed(model.err().map_or_else(|| "a new mesh on another process".into(), |e| e.to_string())));
         }
+        let Ok(mut model) = model else { return Err(Failed::Unnamed("a new mesh".into())) };
         // (the whole model's largest reference coordinate: a re-meshed body's reference is
         // its current configuration)
         let extent = model.bodies[..own_bodies].iter().flat_map(|b| &model.x0[b.node_offset..b.node_offset + b.mesh.n_nodes()]).fold(0.0_f64, |m, p| m.max(p[0].abs()).max(p[1].abs()));
@@ -212,7 +203,7 @@ impl Simulation {
             lambda[dst..dst + n].copy_from_slice(&self.sol.lambda[src..src + n]);
         }
         let baseline = self.run.remesh_baseline[..own_bodies].to_vec();
-        let own_state = OwnState { model, u, u_prev, dynamics: None, fields, lambda, j0, baseline };
+        let own_state = OwnState { u, u_prev, dynamics: None, fields, lambda, j0, baseline };
 
         // the ties (on its own nodes) through the node map from this part to the new one: a
         // body not re-meshed keeps its nodes' order, a re-meshed one (its own or a ghost)
@@ -243,7 +234,7 @@ impl Simulation {
             }
             Ok((ties, tied))
         };
-        let mut sim = self.grown(own_state, &new_layout, &stale, self.time, self.spec, reach, ties).map_err(Failed::Unnamed)?;
+        let mut sim = self.grown(&model, own_state, &new_layout, &stale, self.time, self.spec, reach, ties).map_err(Failed::Unnamed)?;
 
         // the new boundaries: apart from everything (the barrier at the new state was
         // evaluated when the state was set) and crossing nothing

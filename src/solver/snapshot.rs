@@ -15,10 +15,9 @@ use crate::contact::NodalContact;
 use crate::element::N_ENH;
 use crate::model::Model;
 
-/// A part's own bodies' state ([`Simulation::own_state`]): its model (own bodies first, then
-/// its ghosts as they were), and the values of its own nodes and elements.
+/// A part's own bodies' state ([`Simulation::own_state`]): the values of its own nodes and
+/// elements.
 pub(super) struct OwnState {
-    pub model: Model,
     pub u: Vec<f64>,
     pub u_prev: Vec<f64>,
     pub dynamics: Option<[Vec<f64>; 4]>,
@@ -351,7 +350,7 @@ impl Simulation {
     pub fn regrown(&self, time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64) -> Result<Simulation, String> {
         let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
         let whole_ties = self.whole_ties();
-        let mut sim = self.grown(self.own_state(), &p.layout.clone(), &[], time, spec, reach, |sim| sim.local_ties(&whole_ties.0, &whole_ties.1))?;
+        let mut sim = self.grown(&self.model, self.own_state(), &p.layout.clone(), &[], time, spec, reach, |sim| sim.local_ties(&whole_ties.0, &whole_ties.1))?;
         sim.sys.partition.repartitions += 1;
         Ok(sim)
     }
@@ -364,7 +363,6 @@ impl Simulation {
         let f = &self.sol.fields;
         let own = ..own_elements;
         OwnState {
-            model: self.model.clone(),
             u: self.sol.u[..2 * own_nodes].to_vec(),
             u_prev: self.u_prev[..2 * own_nodes].to_vec(),
             dynamics: self.dynamics.as_ref().map(|d| [&d.u, &d.v, &d.a, &d.g].map(|v| v[..2 * own_nodes].to_vec())),
@@ -375,8 +373,9 @@ impl Simulation {
         }
     }
 
-    /// On a part: the simulation of this part grown again from `own` (its own bodies' state,
-    /// [`Self::own_state`], possibly with bodies re-meshed), its bodies laid out by `layout`,
+    /// On a part: the simulation of this part grown again from `model` (its own bodies first,
+    /// possibly re-meshed, then its ghosts as they were) and `own` (its own bodies' state,
+    /// [`Self::own_state`]), its bodies laid out by `layout`,
     /// the ghosts of `stale` sent again by their owners
     /// ([`crate::parallel::part::RankPart::regrow_with`]), and the ties `ties` gives for the
     /// new part (its own nodes', in its numbering). The ghosts' displacements come from their
@@ -386,10 +385,10 @@ impl Simulation {
     /// Not a part, a part that cannot be grown again, or what [`Simulation::new_part`] and
     /// [`Simulation::set_state`] refuse — on every process alike.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn grown(&self, own: OwnState, layout: &std::sync::Arc<crate::parallel::part::BodyLayout>, stale: &[usize], time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64, ties: impl FnOnce(&Simulation) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String>) -> Result<Simulation, String> {
+    pub(super) fn grown(&self, model: &Model, own: OwnState, layout: &std::sync::Arc<crate::parallel::part::BodyLayout>, stale: &[usize], time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64, ties: impl FnOnce(&Simulation) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String>) -> Result<Simulation, String> {
         use crate::parallel::part::{PartView, RankPart};
         let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
-        let OwnState { model, u: own_u, u_prev: own_u_prev, dynamics: own_dynamics, fields: own_fields, lambda: own_lambda, j0: own_j0, baseline } = own;
+        let OwnState { u: own_u, u_prev: own_u_prev, dynamics: own_dynamics, fields: own_fields, lambda: own_lambda, j0: own_j0, baseline } = own;
         let own_bodies = p.own_bodies;
         let own_nodes = own_u.len() / 2;
         // the coordinates of every node of the part: its own from `own`, its ghosts' as they are
@@ -398,10 +397,9 @@ impl Simulation {
             .map(|n| [model.x0[n][0] + own_u[2 * n], model.x0[n][1] + own_u[2 * n + 1]])
             .chain((ghosts_from..self.model.n_nodes()).map(|n| [self.model.x0[n][0] + self.sol.u[2 * n], self.model.x0[n][1] + self.sol.u[2 * n + 1]]))
             .collect();
-        let view = PartView { model: &model, nodes: &p.nodes, bodies: &p.bodies, n_owned_bodies: own_bodies, layout: &p.layout };
+        let view = PartView { model, nodes: &p.nodes, bodies: &p.bodies, n_owned_bodies: own_bodies, layout: &p.layout };
         let part = RankPart::regrow_with(view, &x, reach, layout, stale).map_err(|e| e.to_string())?;
         drop(x);
-        drop(model);
         let comm = p.nodes.comm();
         let (n_local, ne, nb) = (part.nodes.n_local(), part.model.elements.len(), part.bodies.len());
         // the nodal vectors (displacements, the dynamics' u, v, a, g): its own, then the
