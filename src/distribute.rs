@@ -47,12 +47,18 @@ pub fn particles_at(model: &Model, x: &[[f64; 2]]) -> Vec<Particle> {
 /// between bodies whose reference bounding boxes are at most [`PROXIMITY_GAP_FRACTION`] × the
 /// median body size apart.
 pub fn particle_graph(model: &Model) -> Result<Graph, PartitionError> {
-    let ps = particles(model);
+    proximity_graph(&particles(model))
+}
+
+/// The particle graph of particles `ps` (their element counts and boxes, wherever they are):
+/// edges between those whose boxes are at most [`PROXIMITY_GAP_FRACTION`] × the median size
+/// apart ([`particle_graph`] on the reference configuration).
+pub fn proximity_graph(ps: &[Particle]) -> Result<Graph, PartitionError> {
     let mut sizes: Vec<f64> = ps.iter().map(|p| (p.max[0] - p.min[0]).max(p.max[1] - p.min[1])).collect();
     sizes.sort_by(f64::total_cmp);
     let median = sizes.get(sizes.len() / 2).copied().unwrap_or(0.0);
     let gap = if median.is_finite() { PROXIMITY_GAP_FRACTION * median } else { 0.0 };
-    partition::particle_graph(&ps, Adjacency::Proximity { gap })
+    partition::particle_graph(ps, Adjacency::Proximity { gap })
 }
 
 /// Owner (`0..nparts`) of every body of the model: METIS k-way partition of

@@ -86,8 +86,14 @@ fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
     assert_ne!(cohering, case);
     let tied = cohering_grown_again(comm.clone(), &cohering);
     let remeshed = cohering_remeshed(comm.clone(), &cohering);
+    let migrated = repartitioned(comm.clone(), &cohering);
+    let plastic = friction
+        .replace("model = \"elastic\"\n", "model = \"j2\"\nhardening = { preset = \"aluminium_250c\" }\ndensity = 0.01\n")
+        .replace("[time]\n", "[time]\nintegrator = \"hht\"\n");
+    assert!(plastic.contains("j2") && plastic.contains("hht"), "the J2 dynamic case");
+    let moved_whole = state_moves_whole(comm.clone(), &plastic);
     held_particle_left_out(comm, &case);
-    format!("{frictionless}; with friction 0.2: {rubbing}; cohering, grown again: {tied}; cohering, re-meshed: {remeshed}")
+    format!("{frictionless}; with friction 0.2: {rubbing}; cohering, grown again: {tied}; cohering, re-meshed: {remeshed}; repartitioned, cohering: {migrated}; J2 with friction and inertia: {moved_whole}")
 }
 
 /// A particle that holds a probe is not re-meshed (its node numbers would lose their meaning):
@@ -156,6 +162,94 @@ fn cohering_remeshed(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text
     let after_remesh = [1, 2, 3, 6, 7].iter().map(|&c| (a[c] - b[c]).abs() / b[c].abs().max(1e-12 * scale)).fold(0.0, f64::max);
     assert!(after_remesh <= REMESHED_TOL, "rank {rank} of {size}: the cohering parts re-meshed end {after_remesh:e} from the whole run");
     format!("{after} ties kept, before the re-mesh {until:.1e}, at the end {after_remesh:.1e}")
+}
+
+/// The cohering run on parts whose discs all change owner after step 4 and again after step 6
+/// (`Simulation::migrated`: every owner moves up one rank, each disc sent whole to its new owner
+/// with its state and ties) against the whole serial run: the ties are the same before and
+/// after, every process owns what it was given, and the history equals the whole run's to
+/// [`FRICTIONLESS_TOL`] (the state goes over exactly, [`state_moves_whole`]; only the
+/// distributed solver's row order changes).
+fn repartitioned(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
+    use std::ops::ControlFlow;
+    let (rank, size) = (comm.rank(), comm.size());
+    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    let serial = run(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
+    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
+    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let mut rows = Vec::new();
+    let mut ties = Vec::new();
+    for stop in [4, 6, usize::MAX] {
+        sim.run_controlled(&mut |_, r| {
+            rows.push(row(r));
+            if r.step == stop { ControlFlow::Break("repartition".into()) } else { ControlFlow::Continue(()) }
+        })
+        .expect("the run goes on");
+        if stop == usize::MAX {
+            break;
+        }
+        let before = sim.barrier_ties().expect("the barrier");
+        let owner: Vec<usize> = sim.owners().expect("a part").1.iter().map(|&o| (o + 1) % size).collect();
+        let repartitions = sim.partition().repartitions;
+        sim = sim.migrated(&owner).expect("the discs move to their new owners");
+        let (own, now) = sim.owners().expect("a part");
+        assert_eq!(now, &owner[..], "rank {rank}: the owners after the repartition at step {stop}");
+        assert_eq!(own, (0..owner.len()).filter(|&b| owner[b] == rank).collect::<Vec<_>>(), "rank {rank}: its own discs after the repartition at step {stop}");
+        assert_eq!(sim.partition().repartitions, repartitions + 1, "rank {rank}: a repartition counted");
+        let after = sim.barrier_ties().expect("the barrier");
+        assert_eq!(before, after, "rank {rank}: the ties (count, largest gap) repartitioned at step {stop}");
+        ties.push(after.0);
+    }
+    assert!(ties.iter().all(|&n| n > 0), "rank {rank}: no ties when the discs moved ({ties:?}): the case no longer tests it");
+    // owners that leave a process without a disc are refused, on every process alike
+    if size > 1 {
+        let err = sim.migrated(&vec![0; whole.bodies.len()]).err().expect("owners leaving processes idle are refused");
+        assert!(err.contains("none of the"), "rank {rank}: {err}");
+    }
+    let worst = worst_difference(&rows, &serial, rank);
+    assert!(worst <= FRICTIONLESS_TOL, "rank {rank} of {size}: the parts repartitioned differ from the whole run by {worst:e}");
+    format!("ties {ties:?} when the discs moved, largest difference {worst:.1e}")
+}
+
+/// J2 discs with friction 0.2 and inertia (HHT-α) on parts, every disc moved to the next rank
+/// after step 3 (`Simulation::migrated`): the whole state gathered on rank 0 after the move —
+/// displacements, u_{n−1}, the dynamics' u, v, a and g, every element's stresses, plastic state,
+/// pressure, Θ, enhanced modes, multiplier and j₀, the bodies' reference areas and re-mesh
+/// baselines — is bit for bit the state gathered before it, and the run goes on. (This case's
+/// path is decided by round-off from its third step — the serial and the parts runs part
+/// there, migrated or not — so the state is compared, not the history.)
+fn state_moves_whole(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
+    use std::ops::ControlFlow;
+    let (rank, size) = (comm.rank(), comm.size());
+    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
+    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    sim.run_controlled(&mut |_, r| if r.step == 3 { ControlFlow::Break("repartition".into()) } else { ControlFlow::Continue(()) }).expect("three steps");
+    let describe = |g: Option<mpfem::solver::Gathered>| {
+        g.map(|g| {
+            let s = g.state;
+            let plastic = s.sol.fields.states.iter().flatten().filter(|q| q.eps_p > 0.0).count();
+            let text = format!("{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}", s.sol.u, s.u_prev, s.dynamics, s.sol.fields, s.sol.lambda, s.sol.j0, s.scalars.run.area0_body, s.scalars.run.remesh_baseline, s.sol.time);
+            (text, plastic, s.dynamics.is_some())
+        })
+    };
+    let before = describe(sim.gather(true));
+    let owner: Vec<usize> = sim.owners().expect("a part").1.iter().map(|&o| (o + 1) % size).collect();
+    let mut sim = sim.migrated(&owner).expect("the discs move to their new owners");
+    let after = describe(sim.gather(true));
+    let said = match (before, after) {
+        (Some((b, plastic, dynamic)), Some((a, ..))) => {
+            assert!(plastic > 0 && dynamic, "rank 0: {plastic} yielded Gauss points, dynamics {dynamic}: the case no longer tests the state");
+            assert!(a == b, "rank 0 of {size}: the state gathered after the move differs from the state before it");
+            format!("{plastic} yielded Gauss points moved bit for bit")
+        }
+        (None, None) if rank > 0 => "gathered on rank 0".into(),
+        _ => panic!("rank {rank}: gathered on another rank than 0"),
+    };
+    sim.advance(case.time.dt).expect("a step after the move");
+    said
 }
 
 /// How far the re-meshed cohering runs may end apart (relative): a re-mesh whose choices

@@ -205,6 +205,18 @@ impl BodyLayout {
         (self.node_offset[n - 1] + self.n_nodes[n - 1], self.elem_offset[n - 1] + self.n_elements[n - 1])
     }
 
+    /// The body holding the whole model's node `n` (None past the last).
+    pub fn node_body(&self, n: usize) -> Option<usize> {
+        let b = self.node_offset.partition_point(|&o| o <= n);
+        (b >= 1 && n < self.node_offset[b - 1] + self.n_nodes[b - 1]).then(|| b - 1)
+    }
+
+    /// This layout with the bodies owned by `owner` (every body's place in the whole model
+    /// stays: it follows the body order, not the owners) and `edge_cut` close pairs split.
+    pub fn with_owners(&self, owner: Vec<usize>, edge_cut: usize) -> Self {
+        Self { owner, edge_cut, ..self.clone() }
+    }
+
     /// The body whose boundary holds the whole model's boundary edge `w` (None past the last).
     pub fn segment_body(&self, w: usize) -> Option<usize> {
         let b = self.segment_offset.partition_point(|&o| o <= w);
@@ -530,7 +542,7 @@ impl RankPart {
 /// A ghost body as numbers (for [`Collective::exchange`]): name, material, mesh size,
 /// contact length, nodes and reference coordinates, elements, boundary, edge sets, prescribed
 /// dofs, each list after its length. Every count and index is below 2⁵³, so exact in an f64.
-fn write_ghost(g: &GhostBody, out: &mut Vec<f64>) {
+pub(crate) fn write_ghost(g: &GhostBody, out: &mut Vec<f64>) {
     fn text(t: &str, out: &mut Vec<f64>) {
         out.push(t.len() as f64);
         out.extend(t.bytes().map(f64::from));
@@ -556,7 +568,7 @@ fn write_ghost(g: &GhostBody, out: &mut Vec<f64>) {
 }
 
 /// The next number of `at` as a count or index (a whole number from 0 to 2⁵³).
-fn read_usize(at: &mut &[f64]) -> Result<usize, String> {
+pub(crate) fn read_usize(at: &mut &[f64]) -> Result<usize, String> {
     let (&v, rest) = at.split_first().ok_or("the record ends early")?;
     *at = rest;
     if v >= 0.0 && v <= 9.007_199_254_740_992e15 && v.fract() == 0.0 {
@@ -567,7 +579,7 @@ fn read_usize(at: &mut &[f64]) -> Result<usize, String> {
 }
 
 /// The next `n` numbers of `at` (at most what is left).
-fn read_slice<'a>(at: &mut &'a [f64], n: usize) -> Result<&'a [f64], String> {
+pub(crate) fn read_slice<'a>(at: &mut &'a [f64], n: usize) -> Result<&'a [f64], String> {
     if n > at.len() {
         return Err(format!("{n} numbers asked, {} left", at.len()));
     }
@@ -595,7 +607,7 @@ fn read_indices<const K: usize>(at: &mut &[f64], below: usize) -> Result<Vec<[us
 }
 
 /// A ghost body written by [`write_ghost`], with every count and index checked.
-fn read_ghost(at: &mut &[f64]) -> Result<GhostBody, String> {
+pub(crate) fn read_ghost(at: &mut &[f64]) -> Result<GhostBody, String> {
     fn text(at: &mut &[f64]) -> Result<String, String> {
         let n = read_usize(at)?;
         let bytes = read_slice(at, n)?.iter().map(|&v| if (0.0..256.0).contains(&v) { Ok(v as u8) } else { Err(format!("{v} is not a byte")) }).collect::<Result<Vec<u8>, String>>()?;

@@ -28,6 +28,7 @@
 //! (the time loop, cut-back, commit), `remeshing` (re-meshing a running simulation).
 
 mod barrier;
+mod migrate;
 mod newton;
 mod params;
 mod remesh_parts;

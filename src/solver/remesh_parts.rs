@@ -79,6 +79,8 @@ impl Simulation {
             }
         }
         if done > 0 {
+            // (the new element counts may call for new owners: moved before the solve)
+            self.rebalance_parts();
             self.reequilibrate_after_remesh();
         }
         done
@@ -234,7 +236,7 @@ impl Simulation {
             }
             Ok((ties, tied))
         };
-        let mut sim = self.grown(&model, own_state, &new_layout, &stale, self.time, self.spec, reach, ties).map_err(Failed::Unnamed)?;
+        let mut sim = self.grown(&model, own_state, &old_bodies[..own_bodies], &new_layout, &stale, self.time, self.spec, reach, ties).map_err(Failed::Unnamed)?;
 
         // the new boundaries: apart from everything (the barrier at the new state was
         // evaluated when the state was set) and crossing nothing

@@ -89,10 +89,10 @@ impl Gathered {
 /// Values per element in a gathered record: the four Gauss points' material states (6 each)
 /// and stresses (4 each), pressure, Θ, the enhanced modes, λ and j₀ — or, for the output only
 /// ([`OUTPUT_RECORD`]), the stresses and the equivalent plastic and creep strains.
-const ELEMENT_RECORD: usize = 4 * 6 + 4 * 4 + 2 + N_ENH + 2;
+pub(super) const ELEMENT_RECORD: usize = 4 * 6 + 4 * 4 + 2 + N_ENH + 2;
 const OUTPUT_RECORD: usize = 4 * 4 + 4 * 2;
 
-fn element_record(sol: &Solution, e: usize, complete: bool, out: &mut Vec<f64>) {
+pub(super) fn element_record(sol: &Solution, e: usize, complete: bool, out: &mut Vec<f64>) {
     let f = &sol.fields;
     for s in &f.sig[e] {
         out.extend(s);
@@ -111,7 +111,7 @@ fn element_record(sol: &Solution, e: usize, complete: bool, out: &mut Vec<f64>) 
 }
 
 /// Element `e`'s fields (and with `complete` its multiplier and j₀) from its record `r`.
-fn put_element_record(r: &[f64], e: usize, complete: bool, sol: &mut Solution) {
+pub(super) fn put_element_record(r: &[f64], e: usize, complete: bool, sol: &mut Solution) {
     let f = &mut sol.fields;
     for g in 0..4 {
         f.sig[e][g].copy_from_slice(&r[4 * g..4 * g + 4]);
@@ -152,6 +152,12 @@ impl Simulation {
     /// ([`Simulation::new_part`]).
     pub fn is_part(&self) -> bool {
         self.sys.part.is_some()
+    }
+
+    /// On a part: the whole model's bodies this process owns (ascending) and every body's
+    /// owner. None without a part.
+    pub fn owners(&self) -> Option<(&[usize], &[usize])> {
+        self.sys.part.as_ref().map(|p| (&p.bodies[..p.own_bodies], &p.layout.owner[..]))
     }
 
     /// On a part: rank 0's whole state in the whole model's numbering (nodes, elements and
@@ -255,17 +261,11 @@ impl Simulation {
         // the ties (cohering particles) in the whole model's numbering, every process's own
         let ties = self.barrier.as_ref().filter(|b| complete && b.tie_stiffness > 0.0).map(|_| {
             let (ties, tied) = self.whole_ties();
-            let mut local: Vec<f64> = ties.iter().flat_map(|t| [t.node as f64, t.segment as f64, t.dofs[2] as f64 / 2.0, t.dofs[4] as f64 / 2.0, t.xi, t.offset[0], t.offset[1], t.lambda[0], t.lambda[1], t.lambda0[0], t.lambda0[1]]).collect();
+            let mut local: Vec<f64> = ties.iter().flat_map(tie_record).collect();
             let all = comm.gather_varcount_to_root(&local);
             local = tied.iter().flat_map(|&(n, b)| [n as f64, b as f64]).collect();
             let all_tied = comm.gather_varcount_to_root(&local);
-            let mut ties: Vec<Tie> = all
-                .chunks_exact(11)
-                .map(|r| {
-                    let [n, a, b] = [r[0], r[2], r[3]].map(|v| v as usize);
-                    Tie { node: n, segment: r[1] as usize, dofs: [2 * n, 2 * n + 1, 2 * a, 2 * a + 1, 2 * b, 2 * b + 1], xi: r[4], offset: [r[5], r[6]], lambda: [r[7], r[8]], lambda0: [r[9], r[10]] }
-                })
-                .collect();
+            let mut ties: Vec<Tie> = all.chunks_exact(TIE_RECORD).map(tie_from_record).collect();
             ties.sort_by_key(|t| (t.node, t.segment));
             let mut tied: Vec<(usize, usize)> = all_tied.chunks_exact(2).map(|r| (r[0] as usize, r[1] as usize)).collect();
             tied.sort_unstable();
@@ -350,7 +350,7 @@ impl Simulation {
     pub fn regrown(&self, time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64) -> Result<Simulation, String> {
         let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
         let whole_ties = self.whole_ties();
-        let mut sim = self.grown(&self.model, self.own_state(), &p.layout.clone(), &[], time, spec, reach, |sim| sim.local_ties(&whole_ties.0, &whole_ties.1))?;
+        let mut sim = self.grown(&self.model, self.own_state(), &p.bodies[..p.own_bodies], &p.layout.clone(), &[], time, spec, reach, |sim| sim.local_ties(&whole_ties.0, &whole_ties.1))?;
         sim.sys.partition.repartitions += 1;
         Ok(sim)
     }
@@ -385,19 +385,23 @@ impl Simulation {
     /// Not a part, a part that cannot be grown again, or what [`Simulation::new_part`] and
     /// [`Simulation::set_state`] refuse — on every process alike.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn grown(&self, model: &Model, own: OwnState, layout: &std::sync::Arc<crate::parallel::part::BodyLayout>, stale: &[usize], time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64, ties: impl FnOnce(&Simulation) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String>) -> Result<Simulation, String> {
+    pub(super) fn grown(&self, model: &Model, own: OwnState, owned: &[usize], layout: &std::sync::Arc<crate::parallel::part::BodyLayout>, stale: &[usize], time: crate::solver::TimeSpec, spec: SolverSpec, reach: f64, ties: impl FnOnce(&Simulation) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String>) -> Result<Simulation, String> {
         use crate::parallel::part::{PartView, RankPart};
         let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is grown again".into()) };
         let OwnState { u: own_u, u_prev: own_u_prev, dynamics: own_dynamics, fields: own_fields, lambda: own_lambda, j0: own_j0, baseline } = own;
         let own_bodies = p.own_bodies;
         let own_nodes = own_u.len() / 2;
-        // the coordinates of every node of the part: its own from `own`, its ghosts' as they are
+        // the coordinates of every node of the part: its own from `own`, its ghosts' (when
+        // `model` keeps this part's) as they are
         let ghosts_from = self.model.bodies.get(own_bodies).map_or(self.model.n_nodes(), |b| b.node_offset);
+        let keeps_ghosts = model.bodies.len() > owned.len();
+        let ghost_nodes = if keeps_ghosts { ghosts_from..self.model.n_nodes() } else { 0..0 };
         let x: Vec<[f64; 2]> = (0..own_nodes)
             .map(|n| [model.x0[n][0] + own_u[2 * n], model.x0[n][1] + own_u[2 * n + 1]])
-            .chain((ghosts_from..self.model.n_nodes()).map(|n| [self.model.x0[n][0] + self.sol.u[2 * n], self.model.x0[n][1] + self.sol.u[2 * n + 1]]))
+            .chain(ghost_nodes.map(|n| [self.model.x0[n][0] + self.sol.u[2 * n], self.model.x0[n][1] + self.sol.u[2 * n + 1]]))
             .collect();
-        let view = PartView { model, nodes: &p.nodes, bodies: &p.bodies, n_owned_bodies: own_bodies, layout: &p.layout };
+        let bodies: Vec<usize> = owned.iter().chain(if keeps_ghosts { &p.bodies[own_bodies..] } else { &[] }).copied().collect();
+        let view = PartView { model, nodes: &p.nodes, bodies: &bodies, n_owned_bodies: owned.len(), layout: &p.layout };
         let part = RankPart::regrow_with(view, &x, reach, layout, stale).map_err(|e| e.to_string())?;
         drop(x);
         let comm = p.nodes.comm();
@@ -459,7 +463,7 @@ impl Simulation {
     /// On a part: its ties (cohering particles: on its own nodes) and its (node, particle)
     /// pairs held by them, in the whole model's numbering of the nodes, boundary edges and
     /// bodies (the tie's dofs too). Empty without ties or without a part.
-    fn whole_ties(&self) -> (Vec<Tie>, Vec<(usize, usize)>) {
+    pub(super) fn whole_ties(&self) -> (Vec<Tie>, Vec<(usize, usize)>) {
         let (Some(p), Some(b)) = (&self.sys.part, &self.barrier) else { return (Vec::new(), Vec::new()) };
         let segments = &b.contact.segments;
         let first = first_segments(segments, self.model.bodies.len());
@@ -484,7 +488,7 @@ impl Simulation {
     ///
     /// # Errors
     /// A tie whose edge is not on one of the part's bodies, or out of the whole model's range.
-    fn local_ties(&self, ties: &[Tie], tied: &[(usize, usize)]) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String> {
+    pub(super) fn local_ties(&self, ties: &[Tie], tied: &[(usize, usize)]) -> Result<(Vec<Tie>, Vec<(usize, usize)>), String> {
         let (Some(p), Some(b)) = (&self.sys.part, &self.barrier) else { return Ok((ties.to_vec(), tied.to_vec())) };
         let segments = &b.contact.segments;
         let first = first_segments(segments, self.model.bodies.len());
@@ -503,6 +507,21 @@ impl Simulation {
         held.sort_unstable();
         Ok((out, held))
     }
+}
+
+/// Values of a tie in the whole model's numbering as a record ([`tie_record`]).
+pub(super) const TIE_RECORD: usize = 11;
+
+/// A tie in the whole model's numbering ([`Simulation::whole_ties`]) as numbers: its node,
+/// edge, the edge's two nodes, ξ, offset and multipliers (every index below 2⁵³, exact).
+pub(super) fn tie_record(t: &Tie) -> [f64; TIE_RECORD] {
+    [t.node as f64, t.segment as f64, t.dofs[2] as f64 / 2.0, t.dofs[4] as f64 / 2.0, t.xi, t.offset[0], t.offset[1], t.lambda[0], t.lambda[1], t.lambda0[0], t.lambda0[1]]
+}
+
+/// The tie of a [`tie_record`].
+pub(super) fn tie_from_record(r: &[f64]) -> Tie {
+    let [n, a, b] = [r[0], r[2], r[3]].map(|v| v as usize);
+    Tie { node: n, segment: r[1] as usize, dofs: [2 * n, 2 * n + 1, 2 * a, 2 * a + 1, 2 * b, 2 * b + 1], xi: r[4], offset: [r[5], r[6]], lambda: [r[7], r[8]], lambda0: [r[9], r[10]] }
 }
 
 /// The first of `segments` (the contact's boundary edges, body by body) of each of `n_bodies`
