@@ -92,8 +92,9 @@ fn rank_work(comm: std::sync::Arc<dyn mpfem::parallel::Collective>) -> String {
         .replace("[time]\n", "[time]\nintegrator = \"hht\"\n");
     assert!(plastic.contains("j2") && plastic.contains("hht"), "the J2 dynamic case");
     let moved_whole = state_moves_whole(comm.clone(), &plastic);
+    let rebalanced = remeshed_rebalanced(comm.clone(), &case);
     held_particle_left_out(comm, &case);
-    format!("{frictionless}; with friction 0.2: {rubbing}; cohering, grown again: {tied}; cohering, re-meshed: {remeshed}; repartitioned, cohering: {migrated}; J2 with friction and inertia: {moved_whole}")
+    format!("{frictionless}; with friction 0.2: {rubbing}; cohering, grown again: {tied}; cohering, re-meshed: {remeshed}; repartitioned, cohering: {migrated}; J2 with friction and inertia: {moved_whole}; re-meshed, repartitioned: {rebalanced}")
 }
 
 /// A particle that holds a probe is not re-meshed (its node numbers would lose their meaning):
@@ -250,6 +251,52 @@ fn state_moves_whole(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text
     };
     sim.advance(case.time.dt).expect("a step after the move");
     said
+}
+
+/// The discs owned unevenly (rank 0 all but one a process; `RankPart::new`) and every disc
+/// re-meshed after step 3 (`Simulation::remesh_bodies`): the model has changed and the
+/// imbalance is above `[solver] repartition_imbalance` (1.05), so the parts repartition —
+/// METIS on the discs' current boxes and new element counts, the discs that change owner sent
+/// whole — to a better balance, and the history equals the whole serial run re-meshed alike to
+/// [`FRICTIONLESS_TOL`]. One process has nothing to balance.
+fn remeshed_rebalanced(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
+    use std::ops::ControlFlow;
+    let (rank, size) = (comm.rank(), comm.size());
+    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    let nb = whole.bodies.len();
+    // (process r > 0 owns disc r - 1, rank 0 the rest)
+    let first: Vec<usize> = (0..nb).map(|b| if b + 1 < size { b + 1 } else { 0 }).collect();
+    let part = RankPart::new(&whole, &whole.x0, &first, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
+    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let all: Vec<usize> = (0..nb).collect();
+    let run_remeshed = |sim: &mut Simulation| -> (Vec<Vec<f64>>, usize) {
+        let mut rows = Vec::new();
+        sim.run_controlled(&mut |_, r| {
+            rows.push(row(r));
+            if r.step == 3 { ControlFlow::Break("re-mesh".into()) } else { ControlFlow::Continue(()) }
+        })
+        .expect("the run goes on");
+        let done = sim.remesh_bodies(&all);
+        rows.extend(run(sim));
+        (rows, done)
+    };
+    let (serial, s_done) = run_remeshed(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
+    let (rows, done) = run_remeshed(&mut sim);
+    assert_eq!((s_done, done), (nb, nb), "rank {rank}: every disc re-meshed, serially and on the parts");
+    let p = sim.partition().clone();
+    let owner = sim.owners().expect("a part").1.to_vec();
+    let moved = owner.iter().zip(&first).filter(|(a, b)| a != b).count();
+    let before = (nb + 1 - size) as f64 * size as f64 / nb as f64;
+    if size > 1 {
+        assert!(p.repartitions == 1 && moved > 0 && p.moved == moved, "rank {rank} of {size}: not repartitioned after the re-mesh ({p:?}, {moved} discs moved)");
+        assert!(p.imbalance < before - 0.1, "rank {rank} of {size}: imbalance {} after the repartition, about {before} before", p.imbalance);
+    } else {
+        assert_eq!((p.repartitions, moved), (0, 0), "one process repartitioned");
+    }
+    let worst = worst_difference(&rows, &serial, rank);
+    assert!(worst <= FRICTIONLESS_TOL, "rank {rank} of {size}: the parts re-meshed and repartitioned differ from the whole run by {worst:e}");
+    format!("{moved} discs moved, imbalance {before:.2} -> {:.3}, largest difference {worst:.1e}", p.imbalance)
 }
 
 /// How far the re-meshed cohering runs may end apart (relative): a re-mesh whose choices

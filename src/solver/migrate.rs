@@ -247,7 +247,8 @@ impl Simulation {
     /// counts' imbalance is at most `[solver] repartition_imbalance`, otherwise partition the
     /// particles again (METIS on their current boxes and element counts, rank 0's partition
     /// broadcast; the parts renamed to keep as many elements as possible where they are; a
-    /// particle that cannot move keeps its owner) and move them ([`Simulation::migrated`]).
+    /// particle that cannot move keeps its owner) and move them ([`Simulation::migrated`])
+    /// when that balances them better.
     /// A repartition that fails keeps the owners, with a warning. Collective.
     pub(super) fn rebalance_parts(&mut self) {
         let Some(p) = &self.sys.part else { return };
@@ -281,8 +282,10 @@ impl Simulation {
                         *o = old[b];
                     }
                 }
-                // (every process keeps a body, or the owners stay)
-                if (0..size).all(|q| owner.contains(&q)) {
+                // (every process keeps a body and the balance is better, or the owners stay:
+                // moving particles for another split as uneven is not worth it)
+                let better = crate::distribute::imbalance(&graph, &owner, size) < before - 1e-9;
+                if better && (0..size).all(|q| owner.contains(&q)) {
                     decided = owner.iter().map(|&o| o as f64).chain([partition::edge_cut(&graph, &owner) as f64]).collect();
                 }
             }
