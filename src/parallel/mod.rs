@@ -60,7 +60,9 @@
 //! counts is at most `[solver] repartition_imbalance`, otherwise METIS partitions the particle
 //! graph again ([`crate::distribute::rebalance`]). Since all state is replicated, a change of
 //! owners moves no data: it only changes who assembles which elements (and who owns which
-//! Schwarz blocks). The figures go to the log and to `summary.json` ([`PartitionStats`]).
+//! Schwarz blocks). The figures go to the log and to `summary.json` ([`PartitionStats`]). On
+//! owned + ghost parts ([`part`]) the particles that change owner carry their data to their new
+//! owners (`solver/migrate.rs`, [`crate::solver::Simulation::migrated`]).
 
 pub mod part;
 

@@ -95,7 +95,8 @@ impl DistributedNumbering {
 /// body, from which the parts are grown again without the whole model ([`RankPart::regrow`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BodyLayout {
-    /// The process owning each body (fixed for the run).
+    /// The process owning each body (changed by a repartition only,
+    /// [`crate::solver::Simulation::migrated`]).
     pub owner: Vec<usize>,
     /// Each body's node count.
     pub n_nodes: Vec<usize>,
@@ -111,9 +112,9 @@ pub struct BodyLayout {
     /// last): the whole model's equation of a body's free dof is its whole dof less those and
     /// its own prescribed dofs before it ([`crate::assembly::number_equations`]).
     pub fixed_before: Vec<usize>,
-    /// Close pairs of bodies (edges of the particle graph of the reference configuration,
-    /// [`crate::distribute::particle_graph`]) owned by different processes, when the parts
-    /// were first made.
+    /// Close pairs of bodies (edges of the particle graph, [`crate::distribute::particle_graph`])
+    /// owned by different processes: of the reference configuration when the parts were first
+    /// made, of the configuration of the last repartition since.
     pub edge_cut: usize,
 }
 

@@ -266,7 +266,8 @@ impl Simulation {
     fn build_with(model: Model, time: TimeSpec, spec: SolverSpec, comm: Arc<dyn Collective>, previous: Option<(Option<&[usize]>, &PartitionStats)>, part: Option<system::PartSys>, rebuild: bool) -> Result<Self, SolveError> {
         let mut partition = previous.map_or_else(PartitionStats::default, |p| p.1.clone());
         let par = if let Some(p) = &part {
-            // (a part: its owners are fixed for the run; the imbalance follows the re-meshes)
+            // (a part: its owners change only when it is repartitioned, `migrate.rs`; the
+            // imbalance follows the re-meshes)
             partition.ranks = comm.size();
             partition.imbalance = p.layout.imbalance(comm.size());
             partition.edge_cut = p.layout.edge_cut;
