@@ -114,12 +114,17 @@ impl CsvTable {
         }
         let mut kept = header.to_string();
         kept.push('\n');
+        let mut last = 0;
         for line in lines {
             let step = line.split(',').next().and_then(|v| v.trim().parse::<usize>().ok());
-            if step.is_some_and(|s| s <= keep_step) {
+            if let Some(s) = step.filter(|&s| s <= keep_step) {
                 kept.push_str(line);
                 kept.push('\n');
+                last = last.max(s);
             }
+        }
+        if last < keep_step {
+            tracing::warn!(path = %path.display(), last_row = last, checkpoint = keep_step, "restart: the file's rows end at step {last}, the checkpoint is at step {keep_step}: steps {} to {keep_step} are missing from it", last + 1);
         }
         let mut tmp = path.clone().into_os_string();
         tmp.push(".tmp");

@@ -449,6 +449,37 @@ fn restart_with_sparse_output_and_at_the_last_step() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A run restarted from its final checkpoint, written at the step that met `[stop]`, takes no
+/// step past it: the same history and results, bit for bit, and the same stop reason (it took
+/// one more step and wrote it).
+#[test]
+fn restart_at_the_stop_takes_no_step() {
+    let dir = tmpdir("stopped");
+    let base = std::fs::read_to_string(small_case(&dir)).unwrap();
+    let case = dir.join("stop.toml");
+    std::fs::write(&case, base.replace("solid_ratio = 0.95", "solid_ratio = 0.74").replace("checkpoint_every = 5", "checkpoint_every = 1")).unwrap();
+    let a = dir.join("a");
+    run_ok(&case, &a, &[]);
+    let rows = history_lines(&a).len() - 1;
+    let summary = |d: &Path| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap()).unwrap() };
+    assert_eq!(summary(&a)["run"]["stop_reason"], "solid ratio reached", "the case no longer stops at its solid ratio");
+    assert!(rows > 2 && checkpoint_step(&a) == rows as u64, "{rows} steps, checkpoint at {}", checkpoint_step(&a));
+    let b = dir.join("b");
+    copy_dir(&a, &b);
+    run_ok(&case, &b, &["--restart", b.to_str().unwrap()]);
+    assert_same_run(&a, &b);
+    assert_eq!(summary(&b)["run"]["stop_reason"], "solid ratio reached");
+    // a history that ends before the checkpoint (rows lost): the restart says which are missing
+    let c = dir.join("c");
+    copy_dir(&a, &c);
+    let lines = history_lines(&c);
+    std::fs::write(c.join("history.csv"), lines[..rows - 1].join("\n") + "\n").unwrap();
+    let said = run_ok(&case, &c, &["--restart", c.to_str().unwrap()]);
+    let want = format!("steps {} to {rows} are missing", rows - 1);
+    assert!(said.contains(&want), "no warning of the missing rows ({want}): {said}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Through the library, an implicit dynamic analysis (HHT-α, `jobs/examples/dynamic_block.toml`):
 /// stopped after 20 steps by the observer (`ControlFlow::Break`), checkpointed, read back and
 /// restored on a fresh model, it continues exactly like the simulation that was never

@@ -30,7 +30,13 @@ impl Simulation {
         let t_end = self.time.end;
         let mut stop_reason = "end time".to_string();
         let mut interrupted = false;
-        while self.sol.time < t_end * (1.0 - 1e-12) {
+        // (a state that already meets `[stop]` — a run continued after its last step, a
+        // restart from its final checkpoint — takes no step past it)
+        let met = self.run.last_report.as_ref().and_then(|r| self.stop_met(r));
+        if let Some(reason) = &met {
+            stop_reason.clone_from(reason);
+        }
+        while met.is_none() && self.sol.time < t_end * (1.0 - 1e-12) {
             if self.run.step >= self.time.max_steps {
                 return Err(SolveError::TooManySteps(self.time.max_steps));
             }
@@ -60,19 +66,9 @@ impl Simulation {
             };
             self.run.last_report = Some(report.clone());
             let flow = observer(self, &report);
-            let reached = match (&report.compaction, self.model.stop.solid_ratio) {
-                (Some(c), Some(target)) => c.solid_ratio >= target,
-                _ => false,
-            };
-            if reached {
-                stop_reason = "solid ratio reached".to_string();
+            if let Some(reason) = self.stop_met(&report) {
+                stop_reason = reason;
                 break;
-            }
-            if let (Some(c), Some(target)) = (&report.compaction, self.model.stop.wall_pressure) {
-                if self.pressing_pressure(c) >= target {
-                    stop_reason = "wall pressure reached".to_string();
-                    break;
-                }
             }
             if let ControlFlow::Break(reason) = flow {
                 stop_reason = reason;
@@ -102,6 +98,19 @@ impl Simulation {
             timing: self.clock.timing(),
             partition: self.sys.partition.clone(),
         })
+    }
+
+    /// Whether the state of step `report` meets `[stop]` (its solid ratio or its pressing walls'
+    /// pressure), and the summary's reason.
+    fn stop_met(&self, report: &StepReport) -> Option<String> {
+        let c = report.compaction.as_ref()?;
+        if self.model.stop.solid_ratio.is_some_and(|target| c.solid_ratio >= target) {
+            return Some("solid ratio reached".into());
+        }
+        if self.model.stop.wall_pressure.is_some_and(|target| self.pressing_pressure(c) >= target) {
+            return Some("wall pressure reached".into());
+        }
+        None
     }
 
     /// The step `dt`, shortened so that it ends where the walls close the die to the stop solid
