@@ -6,7 +6,7 @@ use crate::model::Model;
 use crate::solver::{RunSummary, Snapshot, StepReport};
 use serde::Serialize;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Compaction columns (the contact issue's exact names), present when the model has walls or
@@ -75,10 +75,13 @@ pub fn history_columns(model: &Model) -> Vec<String> {
     c
 }
 
-/// A CSV table written row by row, flushed after every row (`history.csv`, `probes.csv`): its
-/// first column is the step, by which a restart keeps the rows written before its checkpoint.
+/// A CSV table written row by row, each row whole or not at all (`history.csv`, `probes.csv`):
+/// its first column is the step, by which a restart keeps the rows written before its
+/// checkpoint.
 struct CsvTable {
-    out: BufWriter<File>,
+    out: File,
+    /// The bytes of the rows written whole (a failed row is cut back to it).
+    len: u64,
     path: PathBuf,
     /// Per column: whether it holds a count (written as an integer).
     integer: Vec<bool>,
@@ -89,10 +92,10 @@ struct CsvTable {
 
 impl CsvTable {
     fn create(path: PathBuf, header: &str, integer: Vec<bool>, exact: bool) -> std::io::Result<Self> {
-        let mut out = BufWriter::new(File::create(&path)?);
-        writeln!(out, "{header}")?;
-        out.flush()?;
-        Ok(Self { out, path, integer, exact })
+        let mut out = File::create(&path)?;
+        let line = format!("{header}\n");
+        out.write_all(line.as_bytes())?;
+        Ok(Self { out, len: line.len() as u64, path, integer, exact })
     }
 
     /// Continue `path` after a restart from step `keep_step`: the rows of steps up to
@@ -129,27 +132,47 @@ impl CsvTable {
         let mut tmp = path.clone().into_os_string();
         tmp.push(".tmp");
         let tmp = PathBuf::from(tmp);
-        std::fs::write(&tmp, kept)?;
+        let len = kept.len() as u64;
+        if let Err(e) = std::fs::write(&tmp, kept) {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
         std::fs::rename(&tmp, &path)?;
-        let out = BufWriter::new(std::fs::OpenOptions::new().append(true).open(&path)?);
-        Ok(Self { out, path, integer, exact })
+        let out = std::fs::OpenOptions::new().append(true).open(&path)?;
+        Ok(Self { out, len, path, integer, exact })
     }
 
+    /// Append the row `values`, whole: a write that fails part-way (a full disk) is cut back
+    /// to the rows before it, and the error returned.
     fn write(&mut self, values: &[f64]) -> std::io::Result<()> {
+        use std::fmt::Write as _;
+        let mut row = String::with_capacity(24 * values.len());
         for (i, v) in values.iter().enumerate() {
             if i > 0 {
-                write!(self.out, ",")?;
+                row.push(',');
             }
-            if self.integer.get(i).copied().unwrap_or(false) {
-                write!(self.out, "{v}")?;
+            // (writing into a String cannot fail)
+            let _ = if self.integer.get(i).copied().unwrap_or(false) {
+                write!(row, "{v}")
             } else if self.exact {
-                write!(self.out, "{v:e}")?;
+                write!(row, "{v:e}")
             } else {
-                write!(self.out, "{v:.9e}")?;
+                write!(row, "{v:.9e}")
+            };
+        }
+        row.push('\n');
+        match self.out.write_all(row.as_bytes()) {
+            Ok(()) => {
+                self.len += row.len() as u64;
+                Ok(())
+            }
+            Err(e) => {
+                // (the part of the row that went out is taken back; the file is opened for
+                // appending, so the next row follows the whole ones)
+                let _ = self.out.set_len(self.len);
+                Err(e)
             }
         }
-        writeln!(self.out)?;
-        self.out.flush()
     }
 }
 
@@ -433,7 +456,41 @@ pub struct SummaryFile<'a> {
 
 pub fn write_summary(dir: &Path, s: &SummaryFile) -> std::io::Result<PathBuf> {
     let path = dir.join("summary.json");
-    let text = serde_json::to_string_pretty(s).map_err(std::io::Error::other)?;
-    std::fs::write(&path, text + "\n")?;
-    Ok(path)
+    let text = serde_json::to_string_pretty(s).map_err(std::io::Error::other)? + "\n";
+    // whole or not at all: a temporary file renamed over it; where that cannot be written (a
+    // full disk), over the space the run reserved at its start ([`reserve_summary`])
+    let tmp = dir.join("summary.json.tmp");
+    match std::fs::write(&tmp, &text).and_then(|()| std::fs::rename(&tmp, &path)) {
+        Ok(()) => Ok(path),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            let reserved = std::fs::metadata(&path).map_or(0, |m| m.len());
+            if (text.len() as u64) > reserved {
+                return Err(e);
+            }
+            let mut f = std::fs::OpenOptions::new().write(true).open(&path)?;
+            f.write_all(text.as_bytes())?;
+            f.set_len(text.len() as u64)?;
+            f.sync_data()?;
+            tracing::warn!(%e, "summary.json written over the space reserved at the start (no room for a new file)");
+            Ok(path)
+        }
+    }
+}
+
+/// The bytes [`reserve_summary`] holds for `summary.json`.
+pub const SUMMARY_RESERVE: usize = 64 * 1024;
+
+/// At the start of a run: `summary.json` saying the run is under way, padded to
+/// [`SUMMARY_RESERVE`] bytes, so that the final summary can be written over it when the disk
+/// has filled meanwhile ([`write_summary`]).
+///
+/// # Errors
+/// The file cannot be written (the run should not start).
+pub fn reserve_summary(dir: &Path, title: &str) -> std::io::Result<()> {
+    let head = serde_json::json!({ "mpfem_version": env!("CARGO_PKG_VERSION"), "title": title, "status": "running" }).to_string();
+    let mut text = head.into_bytes();
+    text.resize(SUMMARY_RESERVE - 1, b' ');
+    text.push(b'\n');
+    std::fs::write(dir.join("summary.json"), text)
 }

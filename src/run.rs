@@ -133,6 +133,10 @@ pub enum RunOutcome {
     /// A step could not be solved; the results up to the last converged step are written
     /// (exit code 1).
     Failed(SolveError),
+    /// An output file could not be written (a full disk, a folder gone or read-only): the run
+    /// stopped after the step whose output failed, every row and step written before it
+    /// readable (exit code 1). The text names the file and the cause.
+    OutputFailed { summary: RunSummary, error: String },
     /// The case, the checkpoint or the two together are not usable; nothing was run (exit code
     /// 2). The text is the one reported.
     BadInput(String),
@@ -145,7 +149,7 @@ impl RunOutcome {
         match self {
             Self::Completed(_) => 0,
             Self::Interrupted { checkpoint: true, .. } => 3,
-            Self::Interrupted { checkpoint: false, .. } | Self::Failed(_) => 1,
+            Self::Interrupted { checkpoint: false, .. } | Self::Failed(_) | Self::OutputFailed { .. } => 1,
             Self::BadInput(_) => 2,
         }
     }
@@ -595,6 +599,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let shown = whole.as_ref().unwrap_or(&sim.model);
     let columns = crate::output::history_columns(shown);
     let every = c.output.every;
+    // (the space of the final summary, held from the start)
+    crate::output::reserve_summary(out, &title).map_err(|source| RunError::Summary { dir: out.to_path_buf(), source })?;
     let (mut history, mut results) = match &resumed {
         None => (
             HistoryWriter::create(out, shown).map_err(|source| RunError::History { dir: out.to_path_buf(), continued: false, source })?,
@@ -666,6 +672,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let mut ckpt_failed = false;
     let mut io_error: Option<std::io::Error> = None;
     let mut results_error: Option<ResultsError> = None;
+    // (the first output that could not be written: the run stops there)
+    let mut output_failed: Option<String> = None;
     // (after a restart: the checkpoint's last step, so that a run restarted at its end still
     // writes its last step and final state)
     let mut last_report: Option<StepReport> = sim.last_report().cloned();
@@ -694,6 +702,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         let t_out = Instant::now();
         if let Err(e) = history.write(r) {
             io_error.get_or_insert(e);
+        }
+        // (a file removed under the run takes writes that go nowhere)
+        if io_error.is_none() && !history.path.exists() {
+            io_error = Some(std::io::Error::new(std::io::ErrorKind::NotFound, format!("{} was removed, or its folder", history.path.display())));
         }
         history_s += t_out.elapsed().as_secs_f64();
         let phi = r.compaction.as_ref().map(|c| c.solid_ratio);
@@ -758,6 +770,17 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             last_ckpt = Instant::now();
             ckpt_s += t0.elapsed().as_secs_f64();
         }
+        // a failed write stops the run at once, every rank alike (rank 0's word)
+        let failure = io_error
+            .as_ref()
+            .map(|e| format!("history.csv or probes.csv: {e}"))
+            .or_else(|| results_error.as_ref().map(|e| format!("results: {e}")))
+            .or_else(|| ckpt_failed.then(|| "checkpoint.h5 could not be written".to_string()));
+        if step_flags(&*comm, usize::from(failure.is_some()), false).0 != 0 {
+            let why = failure.unwrap_or_else(|| "an output file on rank 0".into());
+            output_failed.get_or_insert_with(|| why.clone());
+            return ControlFlow::Break(format!("output failed: {why}"));
+        }
         if signal != 0 {
             return ControlFlow::Break(format!("interrupted by {}", signal_name(signal)));
         }
@@ -797,13 +820,13 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     if !opts.quiet {
         reporter.steps_end();
     }
-    if let Some(e) = io_error {
+    if let (Some(e), None) = (io_error, &output_failed) {
         reporter.note(Note::Warning, &format!("history.csv: {e}"));
     }
     // the last converged step is always in the results, also when the run failed after it
     // (a part's state gathered whatever happened to the writer: every rank takes part)
     let gathered = (parts && every > 0).then(|| sim.gather(false)).flatten();
-    if let (Some(w), None) = (results.as_mut(), &results_error) {
+    if let (Some(w), None, None) = (results.as_mut(), &results_error, &output_failed) {
         let snap = match (&gathered, &whole) {
             (Some(g), Some(w)) => g.snapshot(w),
             _ => sim.snapshot(),
@@ -813,10 +836,11 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         }
     }
     drop(gathered);
-    if let Some(e) = &results_error {
+    if let (Some(e), None) = (&results_error, &output_failed) {
         reporter.note(Note::Warning, &format!("results: {e}; the steps written before are readable"));
     }
     let (status, error, summary) = match &result {
+        Ok(s) if output_failed.is_some() => ("failed", output_failed.clone().map(|e| format!("output failed: {e}")), Some(s)),
         Ok(s) if s.interrupted => ("interrupted", None, Some(s)),
         Ok(s) => ("completed", None, Some(s)),
         Err(e) => ("failed", Some(e.to_string()), None),
@@ -850,8 +874,26 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         run: summary,
         last_step,
     };
-    let summary_path = write_summary(out, &file).map_err(|source| RunError::Summary { dir: out.to_path_buf(), source })?;
+    // (a summary that cannot be written fails the run as any other output: exit code 1)
+    let summary_path = match write_summary(out, &file) {
+        Ok(p) => p,
+        Err(e) => {
+            let why = format!("{}: {e}", out.join("summary.json").display());
+            if output_failed.is_some() {
+                reporter.note(Note::Error, &format!("{why} (not written either)"));
+            } else {
+                output_failed = Some(why);
+            }
+            out.join("summary.json")
+        }
+    };
     let outcome = match result {
+        Ok(s) if output_failed.is_some() => {
+            let error = output_failed.unwrap_or_default();
+            reporter.note(Note::Error, &format!("the run stopped at t = {} s after step {}: an output file could not be written: {error}", seconds(s.final_time), s.steps));
+            reporter.note(Note::Info, &format!("every row and output step written before it is readable in {}; free space or choose another --out, then restart from the last checkpoint (if one was written) or run again", out.display()));
+            RunOutcome::OutputFailed { summary: s, error }
+        }
         Ok(s) if s.interrupted => {
             let checkpoint = ckpt_written == Some(s.steps) && !ckpt_failed;
             reporter.note(Note::Info, &format!("{} at t = {} s after {} steps; results up to it are in {}", s.stop_reason, seconds(s.final_time), s.steps, out.display()));
@@ -936,17 +978,28 @@ fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>)
     };
     // (rank 0's flag decides, also within a step: this one is never set)
     sim.set_interrupt(Arc::default());
-    let result = sim.run_controlled(&mut |_, _| match step_flags(&*comm, 0, false) {
-        (0, _) => ControlFlow::Continue(()),
-        _ => ControlFlow::Break("interrupted on rank 0".into()),
+    let result = sim.run_controlled(&mut |_, _| {
+        let (signal, _) = step_flags(&*comm, 0, false);
+        // (rank 0's output failed: it stops, and so do the others)
+        if step_flags(&*comm, 0, false).0 != 0 {
+            return ControlFlow::Break(OUTPUT_FAILED_ON_ROOT.into());
+        }
+        match signal {
+            0 => ControlFlow::Continue(()),
+            _ => ControlFlow::Break("interrupted on rank 0".into()),
+        }
     });
     peak_memory(&*comm);
     Ok(match result {
+        Ok(s) if s.interrupted && s.stop_reason == OUTPUT_FAILED_ON_ROOT => RunOutcome::OutputFailed { error: s.stop_reason.clone(), summary: s },
         Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
         Ok(s) => RunOutcome::Completed(s),
         Err(e) => RunOutcome::Failed(e),
     })
 }
+
+/// The stop reason of ranks 1.. when rank 0 could not write an output file.
+const OUTPUT_FAILED_ON_ROOT: &str = "output failed on rank 0";
 
 /// Every process's peak resident memory (MB, `VmHWM` of `/proc/self/status`), on rank 0 in
 /// rank order (empty elsewhere, and where the system does not tell). Collective.
@@ -1050,6 +1103,10 @@ fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: 
         if part_output_due(r.step, every, probes, signal, due) {
             s.gather(signal != 0 || due);
         }
+        // (rank 0's output failed: it stops, and so do the others)
+        if step_flags(&*comm, 0, false).0 != 0 {
+            return ControlFlow::Break(OUTPUT_FAILED_ON_ROOT.into());
+        }
         if signal != 0 {
             ControlFlow::Break("interrupted on rank 0".into())
         } else {
@@ -1073,6 +1130,7 @@ fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: 
     }
     peak_memory(&*comm);
     Ok(match result {
+        Ok(s) if s.interrupted && s.stop_reason == OUTPUT_FAILED_ON_ROOT => RunOutcome::OutputFailed { error: s.stop_reason.clone(), summary: s },
         Ok(s) if s.interrupted => RunOutcome::Interrupted { summary: s, checkpoint: true },
         Ok(s) => RunOutcome::Completed(s),
         Err(e) => RunOutcome::Failed(e),
