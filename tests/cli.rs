@@ -70,6 +70,31 @@ fn failed_run_exits_1_and_keeps_the_history() {
     assert_eq!(hist.lines().count(), 4, "header + the 3 converged steps are kept");
 }
 
+/// A penalty contact far too soft (`penalty = 1e-12`: the walls and discs pass into each other
+/// without resistance) is a failed run naming the overlap and the key (issue 23: it reported
+/// "completed (solid ratio reached)" with 11 mm of penetration, exit 0); the step that went too
+/// far is in the history, its `max_penetration` above half the element size.
+#[test]
+fn a_contact_far_too_soft_fails_naming_the_penalty() {
+    let dir = tmpdir("soft_penalty");
+    let case = dir.join("soft.toml");
+    let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
+    let soft = text.replacen("method = \"penalty\"\n", "method = \"penalty\"\npenalty = 1e-12\n", 1);
+    assert_ne!(soft, text, "the job's contact table changed");
+    std::fs::write(&case, soft).unwrap();
+    let o = mpfem().args(["run", "--quiet", "--no-plots"]).arg(&case).arg("--out").arg(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("overlap") && err.contains("contact.penalty = 1e-12"), "{err}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "failed");
+    let hist = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let header: Vec<&str> = hist.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|c| *c == "max_penetration").expect("a max_penetration column");
+    let last: f64 = hist.lines().last().unwrap().split(',').nth(col).unwrap().parse().unwrap();
+    assert!(last > 1.0, "the last step's penetration {last} mm: not the one that stopped the run");
+}
+
 /// A log that goes to a file or a pipe (a batch job's stderr) is plain text: no colour codes
 /// (before, every level and field name came wrapped in ANSI escapes).
 #[test]

@@ -11,6 +11,10 @@ use crate::stabilise::{StabilisationKind, Stabilise};
 use std::ops::ControlFlow;
 use std::time::Instant;
 
+/// The largest contact penetration a run on the node-to-segment contact takes, as a fraction
+/// of the smallest element size ([`Simulation::check_penetration`]).
+pub const PENETRATION_LIMIT: f64 = 0.5;
+
 impl Simulation {
     /// Run from the current time to the end time, calling `observer` after every converged
     /// step. On error the last committed solution stays in `self.sol`.
@@ -66,6 +70,9 @@ impl Simulation {
             };
             self.run.last_report = Some(report.clone());
             let flow = observer(self, &report);
+            // (a contact so soft that the particles pass into each other is a failed run, not
+            // a completed one: shown the step, then stopped)
+            self.check_penetration(&report)?;
             if let Some(reason) = self.stop_met(&report) {
                 stop_reason = reason;
                 break;
@@ -98,6 +105,34 @@ impl Simulation {
             timing: self.clock.timing(),
             partition: self.sys.partition.clone(),
         })
+    }
+
+    /// That the node-to-segment contact's largest penetration after step `report` is at most
+    /// [`PENETRATION_LIMIT`] × the smallest element size h: beyond, the particles pass into
+    /// each other and the walls (a penalty far too soft), and the run stops naming it. The
+    /// barrier keeps every gap open: nothing to check.
+    ///
+    /// # Errors
+    /// [`SolveError::Contact`] naming the penetration, the limit and the contact's settings.
+    fn check_penetration(&self, report: &StepReport) -> Result<(), SolveError> {
+        let Some(c) = &report.compaction else { return Ok(()) };
+        let h = self.model.whole_facts().h_min;
+        if self.model.contact.method == crate::contact::ContactMethod::Barrier || !h.is_finite() || c.max_penetration <= PENETRATION_LIMIT * h {
+            return Ok(());
+        }
+        let penalty = self.model.contact.penalty.map_or_else(|| "the default 10 E / h".to_string(), |k| format!("contact.penalty = {k:e} MPa/mm"));
+        Err(SolveError::Contact(format!(
+            "after step {} (t = {:.6e} s) the particles overlap by {:.3e} mm, more than {PENETRATION_LIMIT} of the smallest element size ({h:.3e} mm): the contact is far too soft ({penalty}, method = \"{}\"); raise contact.penalty or use the barrier contact (the default method)",
+            report.step,
+            report.time,
+            c.max_penetration,
+            match self.model.contact.method {
+                crate::contact::ContactMethod::Penalty => "penalty",
+                crate::contact::ContactMethod::AugmentedLagrangian => "augmented_lagrangian",
+                crate::contact::ContactMethod::Lagrange => "lagrange",
+                crate::contact::ContactMethod::Barrier => "barrier",
+            }
+        )))
     }
 
     /// Whether the state of step `report` meets `[stop]` (its solid ratio or its pressing walls'
