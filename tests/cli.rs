@@ -95,6 +95,22 @@ fn a_contact_far_too_soft_fails_naming_the_penalty() {
     assert!(last > 1.0, "the last step's penetration {last} mm: not the one that stopped the run");
 }
 
+/// A residual that is not finite names where it comes from (issue 23: E = 1e300 failed with
+/// "residual history [NaN]" and no hint): the body, its material and Young's modulus.
+#[test]
+fn a_residual_beyond_the_floating_point_range_names_its_cause() {
+    let dir = tmpdir("huge_modulus");
+    let case = dir.join("huge.toml");
+    let text = std::fs::read_to_string("jobs/compaction/discs_2x2_lateral.toml").unwrap();
+    let huge = text.replace("model = \"j2\"", "model = \"elastic\"").replace("youngs_modulus = 64100.0", "youngs_modulus = 1e300").replace("hardening = { preset = \"aluminium_250c\" }\n", "");
+    assert!(huge.contains("1e300") && !huge.contains("preset"), "the job's material changed");
+    std::fs::write(&case, huge).unwrap();
+    let o = mpfem().args(["run", "--quiet", "--no-plots"]).arg(&case).arg("--out").arg(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("not finite") && err.contains("Young's modulus 1e300 MPa") && err.contains("of body g0_p"), "{err}");
+}
+
 /// A log that goes to a file or a pipe (a batch job's stderr) is plain text: no colour codes
 /// (before, every level and field name came wrapped in ANSI escapes).
 #[test]

@@ -80,6 +80,10 @@ pub enum NewtonFailure {
     NotConverged { iterations: usize, residuals: Vec<f64> },
     #[error("diverged at iteration {iteration} (residual history {residuals:?})")]
     Diverged { iteration: usize, residuals: Vec<f64> },
+    /// The residual is not a finite number (NaN, or beyond the floating-point range): `cause`
+    /// names where its largest or first non-finite force sits.
+    #[error("the residual is not finite at iteration {iteration}: {cause}")]
+    NotFinite { iteration: usize, cause: String },
     /// The barrier's collision-free step cut each of the last `max_iterations` updates below
     /// half of itself (in the descent's retry, which may run longer): the step is too long for
     /// the contacts it makes.

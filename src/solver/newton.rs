@@ -291,7 +291,10 @@ impl Simulation {
             // (with the barrier the walls reach the particles during the solve: a residual of
             // zero at its start is no scale for divergence)
             let first = if self.barrier.is_some() { residuals.iter().copied().fold(0.0, f64::max) } else { residuals[0] };
-            if !rnorm.is_finite() || (k > 2 && rel > 1e8 * first.max(1e-300)) {
+            if !rnorm.is_finite() {
+                return Err(NewtonFailure::NotFinite { iteration: k, cause: self.non_finite_cause() });
+            }
+            if k > 2 && rel > 1e8 * first.max(1e-300) {
                 return Err(NewtonFailure::Diverged { iteration: k, residuals });
             }
             let floor = self.force_floor();
@@ -570,6 +573,35 @@ impl Simulation {
     /// k g, where g is a difference of coordinates of up to the assembly's size L: 8 ε k L per
     /// tie, summed in quadrature (1e-6 N with 70 ties of 100 E = 6.4e6 N/mm over 100 mm, more
     /// than the loads of a loose tied network hold at a relative 1e-8, measured).
+    /// Where a residual that is not finite comes from, in words: the dof whose internal
+    /// force (elements, contact, springs) or external force is NaN, or else the largest in
+    /// magnitude (a sum of squares past the floating-point range), named by its body, that
+    /// body's material and Young's modulus, or the loads.
+    fn non_finite_cause(&self) -> String {
+        let (f_int, f_ext) = (&self.sys.f_int, &self.sys.f_ext);
+        let worst = |f: &[f64]| f.iter().enumerate().fold(None, |w: Option<(usize, f64)>, (d, &v)| {
+            let m = if v.is_nan() { f64::INFINITY } else { v.abs() };
+            match w {
+                Some((_, b)) if b >= m => w,
+                _ => Some((d, m)),
+            }
+        });
+        let (Some((di, mi)), Some((de, me))) = (worst(f_int), worst(f_ext)) else { return "no forces".into() };
+        let (dof, external) = if me > mi { (de, true) } else { (di, false) };
+        let f = if external { f_ext[dof] } else { f_int[dof] };
+        let node = dof / 2;
+        let body = self.model.bodies.iter().position(|b| (b.node_offset..b.node_offset + b.mesh.n_nodes()).contains(&node));
+        let about = body.and_then(|b| self.model.bodies.get(b)).map_or_else(String::new, |b| {
+            let e = self.model.materials.get(b.material).map_or(f64::NAN, |m| m.youngs_modulus());
+            format!(" of body {} (materials[{}], Young's modulus {e:e} MPa)", b.name, b.material)
+        });
+        if external {
+            format!("the external force at node {node}{about} is {f:e} N/mm: look at the loads (their values and amplitudes)")
+        } else {
+            format!("the internal force at node {node}{about} is {f:e} N/mm: look at that material's constants, the contact's penalty or stiffness, and the loads")
+        }
+    }
+
     pub(super) fn force_floor(&self) -> f64 {
         let barrier = self.barrier.as_ref().map_or(0.0, |b| b.tie_floor.max(b.stiffness_floor));
         self.run.force_floor.max(barrier)
