@@ -291,6 +291,9 @@ fn check(case: &Path) -> ExitCode {
         c.time.end
     );
     println!("mesh quality: min scaled Jacobian {:.3}, max aspect ratio {:.2}, {} inverted element(s)", k.min_scaled_jacobian, k.max_aspect_ratio, k.n_inverted);
+    for w in &k.warnings {
+        eprintln!("warning: {}: {w}", case.display());
+    }
     ExitCode::SUCCESS
 }
 

@@ -231,6 +231,35 @@ pub struct CaseCheck {
     pub inverted_bodies: Vec<(usize, String, usize)>,
     /// The particles beyond a wall at the start ([`Model::outside_walls`]): one message each.
     pub outside_walls: Vec<String>,
+    /// What the model may run into without being wrong ([`model_warnings`]): one message each.
+    pub warnings: Vec<String>,
+}
+
+/// Above this many elements `check` and `run` warn that the run is large (hours a step on one
+/// core, gigabytes of memory: `docs/scaling/` has the measured rates).
+pub const LARGE_MODEL_ELEMENTS: usize = 500_000;
+
+/// Below this smallest scaled Jacobian of a particle's mesh `check` and `run` warn (1 is a
+/// square; the re-mesher's default limit is 0.2): so distorted an element stiffens, locks or
+/// inverts early.
+pub const POOR_SCALED_JACOBIAN: f64 = 0.1;
+
+/// The warnings of a model that is valid but may not be what was meant: more than
+/// [`LARGE_MODEL_ELEMENTS`] elements, or a particle whose mesh has an element of scaled Jacobian
+/// below [`POOR_SCALED_JACOBIAN`] (not inverted: that is an error). Each names the keys to change.
+pub fn model_warnings(m: &Model) -> Vec<String> {
+    let mut w = Vec::new();
+    let n = m.elements.len();
+    if n > LARGE_MODEL_ELEMENTS {
+        w.push(format!("the model has {n} elements (more than {LARGE_MODEL_ELEMENTS}): expect hours a step on one core and gigabytes of memory; a coarser mesh_size (or fewer divisions) makes it smaller"));
+    }
+    for (i, b) in m.bodies.iter().enumerate() {
+        let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
+        if q.n_inverted == 0 && q.min_scaled_jacobian < POOR_SCALED_JACOBIAN {
+            w.push(format!("bodies[{i}] (\"{}\"): its mesh has an element of scaled Jacobian {:.3} (below {POOR_SCALED_JACOBIAN}), which stiffens, locks or inverts early; a smaller mesh_size or other divisions mesh it better", b.name, q.min_scaled_jacobian));
+        }
+    }
+    w
 }
 
 /// Build the model of case `c` and measure its meshes ([`crate::mesh::quality::quality`]).
@@ -249,6 +278,7 @@ pub fn check(c: &Case) -> Result<CaseCheck, crate::model::ModelError> {
         n_inverted: 0,
         inverted_bodies: Vec::new(),
         outside_walls: m.outside_walls(),
+        warnings: model_warnings(&m),
     };
     for (i, b) in m.bodies.iter().enumerate() {
         let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
@@ -554,6 +584,9 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     if checkpoint.is_none() {
         if let Some(m) = model.outside_walls().into_iter().next() {
             return Ok(bad_input(true, reporter, format!("{label}: {m}")));
+        }
+        for w in model_warnings(&model) {
+            reporter.note(Note::Warning, &format!("{label}: {w}"));
         }
     }
     let formulation = format!("{:?}", c.formulation);

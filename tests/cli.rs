@@ -240,6 +240,48 @@ fn absurd_mesh_sizes_are_refused_before_meshing() {
     }
 }
 
+/// A valid model that may not be what was meant is warned about by `check` and `run`, naming
+/// the body or the key (issue 23, item 1: a mesh of 10⁶ elements or of scaled Jacobian 0.006
+/// passed without a word): a sliver triangle whose 3° corner element has a scaled Jacobian near
+/// sin 3° = 0.05 (below 0.1), and a disc meshed into more than 500,000 elements (`check` only:
+/// the run would take hours). A well-shaped disc of a few hundred elements gets neither.
+#[test]
+fn check_and_run_warn_of_poor_and_huge_meshes() {
+    let dir = tmpdir("warnings");
+    let case = |name: &str, shape: &str, mesh: f64| {
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "[[materials]]\nname = \"m\"\nmodel = \"elastic\"\nyoungs_modulus = 1000.0\npoisson_ratio = 0.3\n\n\
+                 [[bodies]]\nname = \"b\"\nmaterial = \"m\"\nmesh_size = {mesh}\nshape = {shape}\n\n\
+                 [[walls]]\nside = \"left\"\nposition = 0.0\nvelocity = 1.0\n\n[[walls]]\nside = \"right\"\nposition = 100.0\n\n\
+                 [time]\nend = 0.01\ndt = 0.01\n"
+            ),
+        )
+        .unwrap();
+        p
+    };
+    let sliver = case("sliver", "{ type = \"polygon\", vertices = [[10.0, 50.0], [90.0, 50.0], [90.0, 54.2]] }", 2.0);
+    let huge = case("huge", "{ type = \"disc\", center = [50.0, 50.0], radius = 40.0 }", 0.06);
+    let fine = case("fine", "{ type = \"disc\", center = [50.0, 50.0], radius = 40.0 }", 4.0);
+    let said = |args: &[&str], p: &std::path::Path| {
+        let o = mpfem().args(args).arg(p).output().unwrap();
+        assert!(o.status.code().is_some_and(|c| c <= 1), "{args:?} {}: {}", p.display(), String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let out = dir.join("sliver-run");
+    for (args, p) in [(vec!["check"], &sliver), (vec!["run", "--quiet", "--no-plots", "--out", out.to_str().unwrap()], &sliver)] {
+        let err = said(&args, p);
+        assert!(err.contains("warning") && err.contains("bodies[0] (\"b\")") && err.contains("scaled Jacobian"), "{args:?}: {err}");
+    }
+    let err = said(&["check"], &huge);
+    assert!(err.contains("warning") && err.contains("elements (more than 500000)") && err.contains("mesh_size"), "{err}");
+    let err = said(&["check"], &fine);
+    assert!(!err.contains("warning"), "a well-shaped small mesh warned of: {err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A particle partly or wholly outside the die (issue "nothing lost, nothing silent", item 3)
 /// is refused by `mpfem check` and `mpfem run` with exit 2, naming the body, the wall and how
 /// far it reaches past it, before anything is written: a disc of radius 10 mm centred 5 mm

@@ -46,6 +46,20 @@ fn case_text() -> String {
     case
 }
 
+/// The case of `text` and its whole model.
+fn case_and_model(text: &str) -> (mpfem::case::Case, Model) {
+    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    (case, whole)
+}
+
+/// This process's part of `whole` as a simulation of `case`: the discs partitioned by METIS,
+/// the ghosts within a quarter of a disc's size (the grid's neighbours).
+fn part_of(whole: &Model, case: &mpfem::case::Case, comm: &std::sync::Arc<dyn mpfem::parallel::Collective>) -> Simulation {
+    let part = RankPart::for_run(whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
+    Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation")
+}
+
 /// The compared columns of a report: solid ratio, wall pressures and forces.
 fn row(r: &StepReport) -> Vec<f64> {
     let c = r.compaction.as_ref().expect("a compaction");
@@ -104,11 +118,9 @@ fn held_particle_left_out(comm: std::sync::Arc<dyn mpfem::parallel::Collective>,
     let rank = comm.rank();
     let text = text.replace("[output]\n", "[output]\nprobes = [{ name = \"centre\", body = \"g0_p4\", node = 0 }]\n");
     assert!(text.contains("probes"), "the case has no [output] table");
-    let case = mpfem::case::parse(&text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
+    let (case, whole) = case_and_model(&text);
     let mut serial = Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation");
-    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
-    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let mut sim = part_of(&whole, &case, &comm);
     for s in [&mut serial, &mut sim] {
         for _ in 0..2 {
             s.advance(case.time.dt).expect("a step");
@@ -130,8 +142,7 @@ fn held_particle_left_out(comm: std::sync::Arc<dyn mpfem::parallel::Collective>,
 fn cohering_remeshed(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
     use std::ops::ControlFlow;
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
+    let (case, whole) = case_and_model(text);
     let all: Vec<usize> = (0..whole.bodies.len()).collect();
     let run_remeshed = |sim: &mut Simulation| -> (Vec<Vec<f64>>, usize, usize, usize) {
         let mut rows = Vec::new();
@@ -147,8 +158,7 @@ fn cohering_remeshed(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text
         (rows, before, after, done)
     };
     let (serial, s_before, s_after, s_done) = run_remeshed(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
-    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
-    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let mut sim = part_of(&whole, &case, &comm);
     let (rows, before, after, done) = run_remeshed(&mut sim);
     assert_eq!((s_done, done), (all.len(), all.len()), "rank {rank}: every disc re-meshed, serially and on the parts");
     assert!(before > 0, "rank {rank}: no ties at step 4: the case no longer tests them");
@@ -174,11 +184,9 @@ fn cohering_remeshed(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text
 fn repartitioned(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
     use std::ops::ControlFlow;
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
+    let (case, whole) = case_and_model(text);
     let serial = run(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
-    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
-    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let mut sim = part_of(&whole, &case, &comm);
     let mut rows = Vec::new();
     let mut ties = Vec::new();
     for stop in [4, 6, usize::MAX] {
@@ -223,10 +231,8 @@ fn repartitioned(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &s
 fn state_moves_whole(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
     use std::ops::ControlFlow;
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
-    let part = RankPart::for_run(&whole, &whole.x0, 0.25 * 100.0 / 3.0, comm.clone()).expect("part");
-    let mut sim = Simulation::new_part(part, case.time.clone(), case.solver.clone()).expect("part simulation");
+    let (case, whole) = case_and_model(text);
+    let mut sim = part_of(&whole, &case, &comm);
     sim.run_controlled(&mut |_, r| if r.step == 3 { ControlFlow::Break("repartition".into()) } else { ControlFlow::Continue(()) }).expect("three steps");
     let describe = |g: Option<mpfem::solver::Gathered>| {
         g.map(|g| {
@@ -262,8 +268,7 @@ fn state_moves_whole(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text
 fn remeshed_rebalanced(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
     use std::ops::ControlFlow;
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
+    let (case, whole) = case_and_model(text);
     let nb = whole.bodies.len();
     // (process r > 0 owns disc r - 1, rank 0 the rest)
     let first: Vec<usize> = (0..nb).map(|b| if b + 1 < size { b + 1 } else { 0 }).collect();
@@ -308,8 +313,7 @@ const REMESHED_TOL: f64 = 1e-2;
 fn cohering_grown_again(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str) -> String {
     use std::ops::ControlFlow;
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
+    let (case, whole) = case_and_model(text);
     let serial = run(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
     let reach = 0.25 * 100.0 / 3.0;
     let part = RankPart::for_run(&whole, &whole.x0, reach, comm.clone()).expect("part");
@@ -352,8 +356,7 @@ const FRICTION_TOL: f64 = 1e-7;
 /// `blind` also a part without ghosts, which must stop. The report's words.
 fn compare(comm: std::sync::Arc<dyn mpfem::parallel::Collective>, text: &str, tol: f64, blind: bool) -> String {
     let (rank, size) = (comm.rank(), comm.size());
-    let case = mpfem::case::parse(text, std::path::Path::new(".")).expect("case");
-    let whole = Model::from_case(&case).expect("model");
+    let (case, whole) = case_and_model(text);
     let serial = run(&mut Simulation::new(whole.clone(), case.time.clone(), case.solver.clone()).expect("serial simulation"));
     let mut owner: Vec<f64> = mpfem::distribute::partition_particles(&whole, size).iter().map(|&o| o as f64).collect();
     comm.broadcast(&mut owner);
