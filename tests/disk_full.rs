@@ -109,15 +109,16 @@ fn a_full_disk_stops_the_run_at_once_with_whole_output_and_restarts_elsewhere() 
     assert_eq!(std::fs::read(moved.join("history.csv")).unwrap(), reference.as_bytes(), "the restarted run's history.csv differs from the uninterrupted run's");
     drop(_mount);
 
-    // the output folder removed under the run: it stops at once too (the open files took the
-    // rows into nowhere and the run went on to its end)
+    // the output folder taken away under the run: it stops at once too (the open files took
+    // the rows into nowhere and the run went on to its end)
     let gone = dir.join("gone");
     let child = mpfem().args(["run", "--no-plots", "-q"]).arg(&case).arg("--out").arg(&gone).stderr(std::process::Stdio::piped()).spawn().unwrap();
     // (once the first step's row is written: the run is under way)
     while std::fs::read_to_string(gone.join("history.csv")).map_or(0, |t| t.lines().count()) < 2 {
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
-    std::fs::remove_dir_all(&gone).unwrap();
+    // (moved away in one step: removing it file by file races with the files the run creates)
+    std::fs::rename(&gone, dir.join("gone-moved")).unwrap();
     let o = child.wait_with_output().unwrap();
     let said = String::from_utf8_lossy(&o.stderr).to_string();
     assert_eq!(o.status.code(), Some(1), "a removed output folder is a failed run: {said}");
