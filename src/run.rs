@@ -1013,14 +1013,7 @@ fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>)
     sim.set_interrupt(Arc::default());
     let result = sim.run_controlled(&mut |_, _| {
         let (signal, _) = step_flags(&*comm, 0, false);
-        // (rank 0's output failed: it stops, and so do the others)
-        if step_flags(&*comm, 0, false).0 != 0 {
-            return ControlFlow::Break(OUTPUT_FAILED_ON_ROOT.into());
-        }
-        match signal {
-            0 => ControlFlow::Continue(()),
-            _ => ControlFlow::Break("interrupted on rank 0".into()),
-        }
+        root_verdict(&*comm, signal)
     });
     peak_memory(&*comm);
     Ok(match result {
@@ -1058,6 +1051,22 @@ fn step_flags(comm: &dyn Collective, signal: usize, due: bool) -> (usize, bool) 
     let mut flags = [signal as f64, if due { 1.0 } else { 0.0 }];
     comm.broadcast(&mut flags);
     (flags[0] as usize, flags[1] != 0.0)
+}
+
+/// On ranks 1.., after a step's output: rank 0's word on it (its second [`step_flags`], after
+/// its writes: whether one failed), and the stop `signal` of its first. Collective.
+///
+/// (Two broadcasts a step, not one: the first decides what is gathered for the writes, the
+/// second tells how the writes went; 16 bytes each.)
+fn root_verdict(comm: &dyn Collective, signal: usize) -> ControlFlow<String> {
+    if step_flags(comm, 0, false).0 != 0 {
+        // (rank 0's output failed: it stops, and so do the others)
+        ControlFlow::Break(OUTPUT_FAILED_ON_ROOT.into())
+    } else if signal != 0 {
+        ControlFlow::Break("interrupted on rank 0".into())
+    } else {
+        ControlFlow::Continue(())
+    }
 }
 
 /// Whether a distributed run's parts gather their state after step `step` (every process
@@ -1136,15 +1145,7 @@ fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: 
         if part_output_due(r.step, every, probes, signal, due) {
             s.gather(signal != 0 || due);
         }
-        // (rank 0's output failed: it stops, and so do the others)
-        if step_flags(&*comm, 0, false).0 != 0 {
-            return ControlFlow::Break(OUTPUT_FAILED_ON_ROOT.into());
-        }
-        if signal != 0 {
-            ControlFlow::Break("interrupted on rank 0".into())
-        } else {
-            ControlFlow::Continue(())
-        }
+        root_verdict(&*comm, signal)
     };
     let never = Arc::default();
     let mut remade = None;

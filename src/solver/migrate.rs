@@ -50,6 +50,12 @@ impl Simulation {
     /// output groups or probes that would move; or what [`Simulation::regrown`] refuses — on
     /// every process alike.
     pub fn migrated(&self, owner: &[usize]) -> Result<Simulation, String> {
+        self.migrated_with_cut(owner, None)
+    }
+
+    /// [`Simulation::migrated`], given the new owners' edge cut when the caller knows it (it is
+    /// computed from every body's box, all-gathered, otherwise).
+    fn migrated_with_cut(&self, owner: &[usize], cut: Option<usize>) -> Result<Simulation, String> {
         let Some(p) = &self.sys.part else { return Err("only a process's part of a distributed model is repartitioned".into()) };
         let started = std::time::Instant::now();
         let comm = p.nodes.comm_arc();
@@ -81,6 +87,15 @@ impl Simulation {
         // the bodies that leave, each to its new owner, whole
         let (whole_ties, whole_tied) = self.whole_ties();
         let body_of = |n: usize| p.layout.node_body(n).unwrap_or(usize::MAX);
+        // (the ties and tied pairs of each body, grouped once)
+        let mut ties_of: BTreeMap<usize, (Vec<Tie>, Vec<(usize, usize)>)> = BTreeMap::new();
+        for t in whole_ties {
+            ties_of.entry(body_of(t.node)).or_default().0.push(t);
+        }
+        for t in whole_tied {
+            ties_of.entry(body_of(t.0)).or_default().1.push(t);
+        }
+        let no_ties = (Vec::new(), Vec::new());
         let dynamics: Option<[&[f64]; 4]> = self.dynamics.as_ref().map(|d| [&d.u[..], &d.v[..], &d.a[..], &d.g[..]]);
         let mut send = vec![Vec::new(); size];
         let mut moved = 0;
@@ -111,12 +126,11 @@ impl Simulation {
                 }
                 None => out.extend(std::iter::repeat_n(0.0, QUALITY_RECORD + 1)),
             }
-            let ties: Vec<&Tie> = whole_ties.iter().filter(|t| body_of(t.node) == g).collect();
+            let (ties, tied) = ties_of.get(&g).unwrap_or(&no_ties);
             out.push(ties.len() as f64);
-            out.extend(ties.into_iter().flat_map(tie_record));
-            let tied: Vec<&(usize, usize)> = whole_tied.iter().filter(|t| body_of(t.0) == g).collect();
+            out.extend(ties.iter().flat_map(tie_record));
             out.push(tied.len() as f64);
-            out.extend(tied.into_iter().flat_map(|&(n, c)| [n as f64, c as f64]));
+            out.extend(tied.iter().flat_map(|&(n, c)| [n as f64, c as f64]));
         }
         let got = comm.exchange(&send);
         drop(send);
@@ -206,8 +220,10 @@ impl Simulation {
                 put_element_record(&record, e0 + i, true, &mut sol);
             }
             baseline.push(self.run.remesh_baseline[k].clone());
-            ties.extend(whole_ties.iter().filter(|t| body_of(t.node) == g).cloned());
-            tied.extend(whole_tied.iter().filter(|t| body_of(t.0) == g).copied());
+            if let Some((t, d)) = ties_of.remove(&g) {
+                ties.extend(t);
+                tied.extend(d);
+            }
         }
         ties.sort_by_key(|t| (t.node, t.segment));
         tied.sort_unstable();
@@ -215,7 +231,7 @@ impl Simulation {
         let own = OwnState { u, u_prev, dynamics: dyn_new, fields, lambda, j0, baseline };
 
         // its new part, with the ghosts within reach of its new own bodies
-        let cut = crate::distribute::proximity_graph(&self.all_body_boxes()).map_or(0, |g| partition::edge_cut(&g, owner));
+        let cut = cut.unwrap_or_else(|| crate::distribute::proximity_graph(&self.all_body_boxes()).map_or(0, |g| partition::edge_cut(&g, owner)));
         let layout = Arc::new(p.layout.with_owners(owner.to_vec(), cut));
         let mut sim = self.grown(&model, own, &owned, &layout, &[], self.time, self.spec, p.reach, |sim| sim.local_ties(&ties, &tied))?;
         sim.interrupt = self.interrupt.clone();
@@ -298,7 +314,7 @@ impl Simulation {
             tracing::info!(imbalance = before, threshold, "model changed: the particles' new partition keeps every owner");
             return;
         }
-        match self.migrated(&owner) {
+        match self.migrated_with_cut(&owner, Some(decided[nb] as usize)) {
             Ok(sim) => {
                 *self = sim;
                 let stats = &self.sys.partition;
