@@ -150,6 +150,96 @@ pub struct GhostBody {
     pub prescribed: Vec<crate::loading::PrescribedDof>,
 }
 
+/// A node or an element of a body: the body and its index in the body's own numbering.
+pub type BodyLocal = (usize, usize);
+
+/// A whole model without its meshes ([`Model::frame`]): its parameters (walls, amplitudes,
+/// materials, contact), and its loads, output groups and probes with their nodes and
+/// elements in their bodies' own numbering. What rank 0 of a run on owned + ghost parts keeps
+/// for the output: at an output step the bodies' current meshes are gathered from their
+/// owners and put into it ([`ModelFrame::assemble`]), and dropped after the writing. The
+/// bodies that loads, groups and probes name keep their meshes (they are never re-meshed,
+/// [`Model::remesh_constraint`]), so their own numbers stay true whatever else is re-meshed.
+#[derive(Clone, Debug)]
+pub struct ModelFrame {
+    /// Everything but the meshes and what refers to nodes.
+    params: Model,
+    n_bodies: usize,
+    /// Each load without its edges, and its edges' nodes.
+    loads: Vec<(crate::loading::EdgeLoad, Vec<[BodyLocal; 2]>)>,
+    reaction_groups: Vec<(String, Vec<BodyLocal>)>,
+    displacement_groups: Vec<(String, Vec<BodyLocal>)>,
+    probes: Vec<(String, LocalProbe)>,
+}
+
+/// A probe's place in its body's own numbering ([`ProbeAt`]).
+#[derive(Clone, Debug)]
+enum LocalProbe {
+    Point { element: BodyLocal, xi: [f64; 2] },
+    Node { node: BodyLocal, corners: Vec<(BodyLocal, usize)> },
+}
+
+impl ModelFrame {
+    /// The bodies of the frame.
+    pub fn n_bodies(&self) -> usize {
+        self.n_bodies
+    }
+
+    /// The whole model with `bodies` (every body in order, each with its current mesh, its
+    /// reference coordinates and its prescribed dofs, as [`Model::ghost_body`] gives them),
+    /// numbered one after the other, the loads, groups and probes put on their nodes.
+    ///
+    /// # Errors
+    /// Another number of bodies than the frame's ([`ModelError::NoBody`] naming the count),
+    /// or a body named by a load, group or probe without the node or element it names.
+    pub fn assemble(&self, bodies: Vec<GhostBody>) -> Result<Model, ModelError> {
+        if bodies.len() != self.n_bodies {
+            return Err(ModelError::NoBody(bodies.len()));
+        }
+        let mut m = self.params.with_ghosts(0, bodies)?;
+        let missing = |b: usize| ModelError::Probe { key: format!("bodies[{b}]"), message: "a load, output group or probe names a node or element its mesh no longer has".into() };
+        let node = |(b, i): BodyLocal| -> Result<usize, ModelError> {
+            let body = &m.bodies[b];
+            if i < body.mesh.n_nodes() {
+                Ok(body.node_offset + i)
+            } else {
+                Err(missing(b))
+            }
+        };
+        let element = |(b, j): BodyLocal| -> Result<usize, ModelError> {
+            let body = &m.bodies[b];
+            if j < body.mesh.n_elements() {
+                Ok(body.elem_offset + j)
+            } else {
+                Err(missing(b))
+            }
+        };
+        let loads = self
+            .loads
+            .iter()
+            .map(|(l, edges)| Ok(crate::loading::EdgeLoad { edges: edges.iter().map(|&[a, b]| Ok([node(a)?, node(b)?])).collect::<Result<_, ModelError>>()?, ..l.clone() }))
+            .collect::<Result<Vec<_>, ModelError>>()?;
+        let groups = |gs: &[(String, Vec<BodyLocal>)]| gs.iter().map(|(label, nodes)| Ok(NodeGroup { label: label.clone(), nodes: nodes.iter().map(|&n| node(n)).collect::<Result<_, ModelError>>()? })).collect::<Result<Vec<_>, ModelError>>();
+        let (reaction_groups, displacement_groups) = (groups(&self.reaction_groups)?, groups(&self.displacement_groups)?);
+        let probes = self
+            .probes
+            .iter()
+            .map(|(name, at)| {
+                let at = match at {
+                    LocalProbe::Point { element: e, xi } => ProbeAt::Point { element: element(*e)?, xi: *xi },
+                    LocalProbe::Node { node: n, corners } => ProbeAt::Node { node: node(*n)?, corners: corners.iter().map(|&(e, a)| Ok((element(e)?, a))).collect::<Result<_, ModelError>>()? },
+                };
+                Ok(Probe { name: name.clone(), at })
+            })
+            .collect::<Result<Vec<_>, ModelError>>()?;
+        m.loading.loads = loads;
+        m.reaction_groups = reaction_groups;
+        m.displacement_groups = displacement_groups;
+        m.probes = probes;
+        Ok(m)
+    }
+}
+
 /// What a part of a model ([`Model::part`]) keeps of the whole one: the figures that set
 /// parameters of the physics for every body alike (the barrier's d̂ and κ, the ties'
 /// stiffness), which its own bodies alone would give differently on each process.
@@ -292,6 +382,42 @@ impl Model {
             .collect();
         new.x0 = x0;
         Ok((new, map))
+    }
+
+    /// This whole model without its meshes ([`ModelFrame`]). `None` for a part of a model
+    /// (whose loads, groups and probes are its own bodies' only).
+    pub fn frame(&self) -> Option<ModelFrame> {
+        if self.whole.is_some() {
+            return None;
+        }
+        // (the bodies' nodes are contiguous, in body order)
+        let node = |n: usize| -> BodyLocal {
+            let b = self.bodies.partition_point(|b| b.node_offset <= n).saturating_sub(1);
+            (b, n - self.bodies[b].node_offset)
+        };
+        let element = |e: usize| -> BodyLocal {
+            let b = self.elem_body[e];
+            (b, e - self.bodies[b].elem_offset)
+        };
+        let groups = |gs: &[NodeGroup]| gs.iter().map(|g| (g.label.clone(), g.nodes.iter().map(|&n| node(n)).collect())).collect();
+        Some(ModelFrame {
+            params: self.clone_parameters(),
+            n_bodies: self.bodies.len(),
+            loads: self.loading.loads.iter().map(|l| (crate::loading::EdgeLoad { edges: Vec::new(), ..l.clone() }, l.edges.iter().map(|e| e.map(node)).collect())).collect(),
+            reaction_groups: groups(&self.reaction_groups),
+            displacement_groups: groups(&self.displacement_groups),
+            probes: self
+                .probes
+                .iter()
+                .map(|p| {
+                    let at = match &p.at {
+                        ProbeAt::Point { element: e, xi } => LocalProbe::Point { element: element(*e), xi: *xi },
+                        ProbeAt::Node { node: n, corners } => LocalProbe::Node { node: node(*n), corners: corners.iter().map(|&(e, a)| (element(e), a)).collect() },
+                    };
+                    (p.name.clone(), at)
+                })
+                .collect(),
+        })
     }
 
     /// Body `k` of this model as a ghost takes it ([`GhostBody`]). Panics for a body out of

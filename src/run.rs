@@ -594,8 +594,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let title = c.title.clone();
     let started = Instant::now();
     let ranks = comm.size();
-    // (on parts, rank 0 keeps the whole model for the output: the state is gathered onto it
-    // at the output steps)
+    // (on parts, rank 0 holds the whole model until the output files are made; then only its
+    // frame, into which the meshes are gathered at the output steps)
     let (mut sim, resumed, mut whole) = match checkpoint {
         None if parts => match part_simulation(&model, &c, &comm, None, RankPart::reach(&model)) {
             Ok(sim) => (sim, None, Some(model)),
@@ -693,6 +693,9 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     // walls (of every loaded wall when none moves)
     let pressing = shown.loading.pressing_sides();
     let has_probes = !shown.probes.is_empty();
+    // (on parts: the whole model without its meshes, for the output; no rank holds the whole
+    // mesh from here on)
+    let frame = whole.take().and_then(|w| w.frame());
     let mut curve: Vec<CurvePoint> = std::mem::take(&mut earlier.curve);
     // checkpoints: every `checkpoint_every` steps, every `checkpoint_minutes`, and after the
     // step in which the stop flag was set
@@ -704,6 +707,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     let mut ckpt_written: Option<usize> = None;
     let mut ckpt_failed = false;
     let mut io_error: Option<std::io::Error> = None;
+    // (on parts: the gathered meshes did not make the whole model)
+    let mut model_error: Option<String> = None;
     let mut results_error: Option<ResultsError> = None;
     // (the first output that could not be written: the run stops there)
     let mut output_failed: Option<String> = None;
@@ -716,10 +721,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     sim.set_interrupt(Arc::clone(&stop_flag));
     let run_started = Instant::now();
     let mut observer = |s: &Simulation, r: &StepReport| {
-        // (on parts: the particles re-meshed in this step into rank 0's whole model first)
-        if let Err(e) = put_remeshed(&mut whole, s) {
-            reporter.note(Note::Warning, &e);
-        }
         last_report = Some(r.clone());
         max_body_volume_error = max_body_volume_error.max(r.volume_error_max_body);
         if let Some(c) = &r.compaction {
@@ -760,8 +761,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         let due = (ckpt_every > 0 && r.step % ckpt_every == 0) || ckpt_interval.is_some_and(|d| last_ckpt.elapsed() >= d);
         let (signal, due) = step_flags(&*comm, opts.stop.as_ref().map_or(0, |f| f.load(Ordering::SeqCst)), due);
         // a part's state gathered onto the whole model, when something is written from it
-        let gathered = if parts && part_output_due(r.step, every, has_probes, signal, due) { s.gather(signal != 0 || due) } else { None };
-        let snap = match (&gathered, &whole) {
+        let mut gathered = if parts && part_output_due(r.step, every, has_probes, signal, due) { s.gather(signal != 0 || due) } else { None };
+        // (and the whole model of its bodies' meshes, for this step's writing only)
+        let assembled = assemble_whole(&frame, gathered.as_mut()).map_err(|e| model_error.get_or_insert(e).clone()).ok().flatten();
+        let snap = match (&gathered, &assembled) {
             (Some(g), Some(w)) => Some(g.snapshot(w)),
             _ if parts => None,
             _ => Some(s.snapshot()),
@@ -792,9 +795,10 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 history_s,
                 restarts: restarts.clone(),
             };
-            ckpt_failed = !match (&gathered, &whole) {
+            ckpt_failed = !match (&gathered, &assembled) {
                 // (gathered complete: a checkpoint was due)
                 (Some(g), Some(w)) => checkpoint_now(out, w, &g.state, &sha, &state, (r.step, r.time), reporter),
+                _ if parts => false,
                 _ => checkpoint_now(out, &s.model, &s.state(), &sha, &state, (r.step, r.time), reporter),
             };
             if !ckpt_failed {
@@ -807,6 +811,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         let failure = io_error
             .as_ref()
             .map(|e| format!("history.csv or probes.csv: {e}"))
+            .or_else(|| model_error.clone())
             .or_else(|| results_error.as_ref().map(|e| format!("results: {e}")))
             .or_else(|| ckpt_failed.then(|| "checkpoint.h5 could not be written".to_string()));
         if step_flags(&*comm, usize::from(failure.is_some()), false).0 != 0 {
@@ -827,10 +832,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             break segment;
         }
     };
-    // (a particle re-meshed in a step that did not converge after it)
-    if let Err(e) = put_remeshed(&mut whole, &sim) {
-        reporter.note(Note::Warning, &e);
-    }
     if let Ok(s) = result.as_mut() {
         s.wall_time_s = wall_before + run_started.elapsed().as_secs_f64();
         if s.interrupted && s.stop_reason == crate::solver::STOP_ABANDONED {
@@ -840,8 +841,14 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             s.stop_reason = format!("interrupted by {} (the step under way abandoned)", signal_name(signal));
             let t0 = Instant::now();
             let state = RunState { phi0, max_body_volume_error, curve: curve.clone(), wall_time_s: wall_before + started.elapsed().as_secs_f64(), history_s, restarts: restarts.clone() };
-            ckpt_failed = !match (parts.then(|| sim.gather(true)).flatten(), &whole) {
-                (Some(g), Some(w)) => checkpoint_now(out, w, &g.state, &sha, &state, (s.steps, s.final_time), reporter),
+            let mut gathered = parts.then(|| sim.gather(true)).flatten();
+            ckpt_failed = !match (assemble_whole(&frame, gathered.as_mut()), &gathered) {
+                (Ok(Some(w)), Some(g)) => checkpoint_now(out, &w, &g.state, &sha, &state, (s.steps, s.final_time), reporter),
+                (Err(e), _) => {
+                    reporter.note(Note::Warning, &e);
+                    false
+                }
+                _ if parts => false,
                 _ => checkpoint_now(out, &sim.model, &sim.state(), &sha, &state, (s.steps, s.final_time), reporter),
             };
             if !ckpt_failed {
@@ -858,17 +865,24 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     }
     // the last converged step is always in the results, also when the run failed after it
     // (a part's state gathered whatever happened to the writer: every rank takes part)
-    let gathered = (parts && every > 0).then(|| sim.gather(false)).flatten();
+    let mut gathered = (parts && every > 0).then(|| sim.gather(false)).flatten();
+    let assembled = assemble_whole(&frame, gathered.as_mut());
     if let (Some(w), None, None) = (results.as_mut(), &results_error, &output_failed) {
-        let snap = match (&gathered, &whole) {
-            (Some(g), Some(w)) => g.snapshot(w),
-            _ => sim.snapshot(),
+        let snap = match (&gathered, &assembled) {
+            (Some(g), Ok(Some(m))) => Some(g.snapshot(m)),
+            _ if parts => None,
+            _ => Some(sim.snapshot()),
         };
-        if let Err(e) = w.finish(&snap, last_report.as_ref()) {
-            results_error = Some(e);
+        match snap {
+            Some(snap) => {
+                if let Err(e) = w.finish(&snap, last_report.as_ref()) {
+                    results_error = Some(e);
+                }
+            }
+            None => reporter.note(Note::Warning, &format!("results: the last step's state did not reach rank 0{}", assembled.as_ref().err().map(|e| format!(" ({e})")).unwrap_or_default())),
         }
     }
-    drop(gathered);
+    drop((gathered, assembled));
     if let (Some(e), None) = (&results_error, &output_failed) {
         reporter.note(Note::Warning, &format!("results: {e}; the steps written before are readable"));
     }
@@ -893,8 +907,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
         n_bodies,
         // the meshes the run ended on: a restart's (its re-meshed particles come from the
         // checkpoint, whatever the case says) and every re-mesh's
-        n_nodes: whole.as_ref().unwrap_or(&sim.model).n_nodes(),
-        n_elements: whole.as_ref().unwrap_or(&sim.model).elements.len(),
+        n_nodes: sim.model.whole_facts().n_nodes,
+        n_elements: sim.model.whole_facts().n_elements,
         wall_time_s,
         peak_memory_mb,
         final_state: last_report.as_ref().map(|r| FinalState::of(r, max_body_volume_error)),
@@ -1075,19 +1089,15 @@ fn part_output_due(step: usize, every: usize, probes: bool, signal: usize, check
     probes || (every > 0 && step % every == 0) || signal != 0 || checkpoint
 }
 
-/// On rank 0 of a run on parts: the particles re-meshed since the last call
-/// ([`Simulation::take_remeshed`]) put into `whole`, the model the output is written on.
+/// On rank 0 of a run on parts: the whole model of `gathered`'s bodies (taken out of it) in
+/// `frame` ([`crate::model::ModelFrame::assemble`]), for one step's writing. `None` without a
+/// frame or without a gathered state (the other ranks, the steps that write nothing of it).
 ///
 /// # Errors
-/// A new mesh the whole model does not take (the output then shows the old one).
-fn put_remeshed(whole: &mut Option<Model>, sim: &Simulation) -> Result<(), String> {
-    let Some(w) = whole.as_mut() else { return Ok(()) };
-    // (a particle re-meshed twice since: its last mesh)
-    let last: std::collections::BTreeMap<usize, crate::mesh::Mesh> = sim.take_remeshed().into_iter().collect();
-    if !last.is_empty() {
-        *w = w.with_body_meshes(last.into_iter().collect()).map_err(|e| format!("the output's model: the re-meshed particles' new meshes: {e}"))?;
-    }
-    Ok(())
+/// Bodies the frame does not take (the step's output is not written).
+fn assemble_whole(frame: &Option<crate::model::ModelFrame>, gathered: Option<&mut crate::solver::Gathered>) -> Result<Option<Model>, String> {
+    let (Some(f), Some(g)) = (frame, gathered) else { return Ok(None) };
+    f.assemble(std::mem::take(&mut g.bodies)).map(Some).map_err(|e| format!("the whole model for the output: {e}"))
 }
 
 /// This process's part of `whole` as a simulation of case `c` ([`Simulation::new_part`]): from

@@ -122,6 +122,25 @@ fn history_difference_but(reference: &Path, other: &Path, what: &str, absolute: 
     worst
 }
 
+/// The worst relative difference of the columns of two `probes.csv` (each column on the scale
+/// of its largest |value|), asserting the same columns and steps and each column within
+/// [`TOL`].
+fn probes_difference(reference: &Path, other: &Path) -> f64 {
+    let (h0, r0) = read_csv(&reference.join("probes.csv"));
+    let (h1, r1) = read_csv(&other.join("probes.csv"));
+    assert_eq!(h0, h1, "probes.csv: columns");
+    assert!(h0.len() > 2 && r0.len() > 2 && r0.len() == r1.len(), "probes.csv: {} and {} steps", r0.len(), r1.len());
+    let mut worst = 0.0f64;
+    for (c, name) in h0.iter().enumerate() {
+        let a: Vec<f64> = r0.iter().map(|r| r[c]).collect();
+        let b: Vec<f64> = r1.iter().map(|r| r[c]).collect();
+        let d = relative(&a, &b);
+        assert!(d <= TOL, "probes.csv column {name} differs by {d:.2e} > {TOL:e}");
+        worst = worst.max(d);
+    }
+    worst
+}
+
 /// Every dataset of every output step of two `results.h5`, read as numbers: the worst
 /// relative difference (asserting the same steps and datasets), and how many were compared.
 fn results_difference(reference: &Path, other: &Path) -> (f64, usize) {
@@ -209,7 +228,9 @@ fn serial_and_parts(dir: &Path, edit: impl Fn(String) -> String, made: &[&str]) 
 #[test]
 fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
     let dir = tmpdir("parts");
-    let (serial_case, parts_case) = serial_and_parts(&dir, |t| t.replace("[output]\nevery = 0", "[output]\nevery = 2\ncheckpoint_every = 4\ncheckpoint_minutes = 0"), &["every = 2"]);
+    // (with probes in discs of both ranks, a point and a node, and a displacement group)
+    let output = "[output]\nevery = 2\ncheckpoint_every = 4\ncheckpoint_minutes = 0\nprobes = [{ name = \"q\", point = [83.0, 84.0] }, { name = \"n\", body = \"g0_p0\", node = 2 }]\ndisplacements = [\"g0_p4.boundary\"]";
+    let (serial_case, parts_case) = serial_and_parts(&dir, |t| t.replace("[output]\nevery = 0", output), &["every = 2", "probes", "g0_p4.boundary"]);
 
     let serial = dir.join("serial");
     run(&serial_case, None, &serial, &["--quiet"]);
@@ -219,7 +240,10 @@ fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
     assert!(said.contains("2 MPI ranks (each its own particles and their neighbours"), "not a run on parts: {said}");
     let worst = history_difference(&serial, &two, "2 ranks");
     let (results, n) = results_difference(&serial, &two);
-    println!("parts on 2 ranks: history {worst:.2e}, results.h5 {results:.2e} over {n} datasets, from the serial faer run");
+    // (rank 0 keeps no mesh between the writes: the probes are read on the whole model made of
+    // the meshes gathered at each step)
+    let probes = probes_difference(&serial, &two);
+    println!("parts on 2 ranks: history {worst:.2e}, results.h5 {results:.2e} over {n} datasets, probes.csv {probes:.2e}, from the serial faer run");
 
     // the 2-rank checkpoint (step 4) on 3 ranks
     let three = dir.join("three");

@@ -171,3 +171,42 @@ fn probes_hold_their_particle_and_follow_a_renumbering() {
     let new = model.with_body_mesh(0, finer).unwrap();
     assert_eq!(holder(&new), (body, corners, xi));
 }
+
+/// A whole model's frame (`Model::frame`: the model without its meshes, its loads, output
+/// groups and probes in their bodies' own numbering — what rank 0 of a run on owned + ghost
+/// parts keeps for the output, issue 21) takes the bodies' meshes back into the very same
+/// model; with a re-meshed body's new mesh, into the model `with_body_mesh` makes (every later
+/// node and element renumbered). Compared in full through their `Debug` forms, which print
+/// every float in full.
+#[test]
+fn a_model_frame_takes_its_meshes_back() {
+    let same = |a: &Model, b: &Model| format!("{a:?}") == format!("{b:?}");
+    let ghosts = |m: &Model| (0..m.bodies.len()).map(|k| m.ghost_body(k)).collect::<Vec<_>>();
+    // a traction, prescribed displacements, both kinds of output group and of probe, on two
+    // bodies
+    let text = std::fs::read_to_string(root().join("jobs/verification/contact_patch.toml")).unwrap()
+        + "\n[output]\nreactions = [\"lower.bottom\"]\ndisplacements = [\"upper.top\"]\nprobes = [{ name = \"p\", point = [5.0, 2.5] }, { name = \"n\", body = \"upper\", node = 3 }]\n";
+    let c = case::parse(&text, &root().join("jobs/verification")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    assert!(!model.loading.loads[0].edges.is_empty() && !model.loading.prescribed.is_empty());
+    assert_eq!((model.reaction_groups.len(), model.displacement_groups.len(), model.probes.len()), (1, 1, 2));
+    let frame = model.frame().expect("a whole model has a frame");
+    assert_eq!(frame.n_bodies(), 2);
+    assert!(same(&frame.assemble(ghosts(&model)).unwrap(), &model), "the contact patch's frame with its meshes is not the model");
+
+    // discs with probes in the fourth (a point and a node), the first re-meshed finer
+    let text = std::fs::read_to_string(root().join("tests/data/die_wall_friction.toml")).unwrap()
+        + "\n[output]\nprobes = [{ name = \"d3\", point = [75.0, 75.0] }, { name = \"n3\", body = \"g0_p3\", node = 5 }]\n";
+    let c = case::parse(&text, &root().join("tests/data")).unwrap();
+    let model = Model::from_case(&c).unwrap();
+    let frame = model.frame().unwrap();
+    let mut spec = c.bodies[0].clone();
+    spec.mesh_size *= 0.5;
+    let remeshed = model.with_body_mesh(0, case::mesh_body(&spec).unwrap()).unwrap();
+    assert_ne!(remeshed.x0.len(), model.x0.len());
+    assert!(same(&frame.assemble(ghosts(&remeshed)).unwrap(), &remeshed), "the discs' frame with a re-meshed disc is not with_body_mesh's model");
+
+    // another number of bodies is refused; a part has no frame
+    assert!(frame.assemble(ghosts(&model)[..3].to_vec()).is_err());
+    assert!(model.part(&[0, 1], 1).unwrap().0.frame().is_none());
+}

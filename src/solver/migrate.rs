@@ -236,9 +236,6 @@ impl Simulation {
         let mut sim = self.grown(&model, own, &owned, &layout, &[], self.time, self.spec, p.reach, |sim| sim.local_ties(&ties, &tied))?;
         sim.interrupt = self.interrupt.clone();
         sim.clock = self.clock.clone();
-        if let Some(np) = sim.sys.part.as_ref() {
-            np.remeshed.lock().unwrap_or_else(std::sync::PoisonError::into_inner).extend(self.take_remeshed());
-        }
         let moved = comm.all_gather_varcount(&[moved as f64]).iter().sum::<f64>() as usize;
         let stats = &mut sim.sys.partition;
         stats.repartitions += 1;

@@ -263,7 +263,7 @@ impl Simulation {
                 eq_whole[q] = whole_eq.get(d).copied().unwrap_or(FIXED);
             }
         }
-        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, layout, whole, reach, remeshed: Default::default() };
+        let sys = system::PartSys { nodes, eqs: Arc::new(eqs), own_dofs, own_eqs, bodies, own_bodies: n_owned_bodies, eq_whole, layout, whole, reach };
         Self::build_with(model, time, spec, comm, None, Some(sys), rebuild)
     }
 

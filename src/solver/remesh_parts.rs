@@ -5,8 +5,8 @@
 //! all-gathered (four numbers a body) into the layout, so that every process numbers the
 //! whole model alike; and every part is grown again from its own bodies, with the re-meshed
 //! ghosts sent again by their owners ([`crate::parallel::part::RankPart::regrow_with`]). Rank 0
-//! receives the new meshes for the output ([`Simulation::take_remeshed`]). No process holds
-//! the whole model.
+//! gets the new meshes with the others at the next output step ([`Simulation::gather`]). No
+//! process holds the whole model.
 //!
 //! The new meshes and their states are those of the whole model's re-mesh (a particle's new
 //! mesh depends on its own state and on the nodes it holds, computed before any is re-meshed),
@@ -252,12 +252,10 @@ impl Simulation {
             return Err(Failed::Bodies(crossed.iter().map(|&g| g as usize).collect()));
         }
 
-        // taken: the run's counts, the new meshes' quality as their baselines, and the new
-        // meshes for rank 0's output
+        // taken: the run's counts and the new meshes' quality as their baselines
         sim.interrupt = self.interrupt.clone();
         sim.clock = self.clock.clone();
         sim.run.total_remeshes += resized.len();
-        let mut records = Vec::new();
         for (_, g, r) in &made {
             let Some(k) = np.binary_search(g).ok() else { continue };
             let body = &sim.model.bodies[k];
@@ -267,33 +265,8 @@ impl Simulation {
             }
             sim.run.remesh_baseline[k] = q;
             tracing::info!(time = sim.sol.time, body = g, name = %body.name, elements = body.mesh.n_elements(), area_change = r.moved.area.relative_change, "particle re-meshed");
-            records.push((*g, sim.model.ghost_body(k)));
-        }
-        let sent = match crate::parallel::part::bodies_to_root(&*comm, &records) {
-            Ok(s) => s,
-            Err(e) => {
-                tracing::error!(%e, "the re-meshed bodies did not reach rank 0: the output keeps their old meshes");
-                Vec::new()
-            }
-        };
-        let pending = self.take_remeshed();
-        if let Some(np) = sim.sys.part.as_ref() {
-            let mut list = np.remeshed.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-            list.extend(pending);
-            list.extend(sent.into_iter().map(|(g, b)| (g, b.body.mesh)));
         }
         *self = sim;
         Ok(resized.len())
-    }
-
-    /// On rank 0 of a run on parts: the bodies re-meshed since the last call (the whole model's
-    /// body and its new mesh, whose nodes are its new reference coordinates), in the order they
-    /// were re-meshed, for the whole model the output is written on
-    /// ([`crate::model::Model::with_body_mesh`]). Empty on the other processes and without a part.
-    pub fn take_remeshed(&self) -> Vec<(usize, crate::mesh::Mesh)> {
-        match &self.sys.part {
-            Some(p) => std::mem::take(&mut *p.remeshed.lock().unwrap_or_else(std::sync::PoisonError::into_inner)),
-            None => Vec::new(),
-        }
     }
 }

@@ -1,8 +1,9 @@
 //! What the output reads of a simulation after a converged step — its model, solution,
 //! previous displacement, counters and the contact's nodal values — as one borrowed view
 //! ([`Snapshot`]), whether the simulation holds the whole model ([`Simulation::snapshot`]) or
-//! a process's part of it, whose own nodes, elements and bodies rank 0 gathers into the whole
-//! model's numbering for the writing and drops after it ([`Simulation::gather`], [`Gathered`]).
+//! a process's part of it, whose own nodes, elements and bodies — their meshes too — rank 0
+//! gathers into the whole model's numbering for the writing and drops after it
+//! ([`Simulation::gather`], [`Gathered`]).
 //! A restart on parts goes the other way: every process takes its nodes, elements and bodies
 //! out of the checkpoint's whole state ([`Simulation::set_whole_state`]). When the particles
 //! have moved out of their ghost layers, each process grows its part again from its own state
@@ -70,6 +71,11 @@ pub struct Gathered {
     /// Whether the whole state was gathered (a checkpoint may be written of it), or only what
     /// the output reads.
     pub complete: bool,
+    /// On a part: every body of the whole model, in order, with its current mesh, reference
+    /// coordinates and prescribed dofs, from its owner (what [`crate::model::ModelFrame`]
+    /// makes the whole model of, for the writing). Empty without a part (the simulation's
+    /// model is the whole one).
+    pub bodies: Vec<crate::model::GhostBody>,
 }
 
 impl Gathered {
@@ -170,7 +176,7 @@ impl Simulation {
     /// holds its initial values and must not be checkpointed ([`Gathered::complete`]).
     pub fn gather(&self, complete: bool) -> Option<Gathered> {
         let Some(p) = &self.sys.part else {
-            return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned(), complete: true });
+            return Some(Gathered { state: self.state(), nodal: self.nodal_contact().cloned(), complete: true, bodies: Vec::new() });
         };
         let comm = p.nodes.comm();
         let whole = self.model.whole_facts();
@@ -271,6 +277,22 @@ impl Simulation {
             tied.sort_unstable();
             (ties, tied)
         });
+        // the bodies' meshes (rank 0 keeps none of them between the writes)
+        let own: Vec<(usize, crate::model::GhostBody)> = (0..p.own_bodies).map(|k| (p.bodies[k], self.model.ghost_body(k))).collect();
+        let bodies = crate::parallel::part::bodies_to_root(comm, &own);
+        drop(own);
+        let bodies = match bodies {
+            Ok(b) if b.len() == whole.n_bodies && b.iter().enumerate().all(|(i, (g, _))| *g == i) => b.into_iter().map(|(_, b)| b).collect(),
+            Ok(b) if !comm.is_root() && b.is_empty() => Vec::new(),
+            Ok(b) => {
+                tracing::error!(bodies = b.len(), expected = whole.n_bodies, "the gathered bodies are not every body once");
+                return None;
+            }
+            Err(e) => {
+                tracing::error!(%e, "the bodies' meshes did not reach rank 0");
+                return None;
+            }
+        };
         let (true, true, Some(areas)) = (received, got_elements, areas) else { return None };
         // (the output's velocity alone: u, a and g hold zeros, not to be checkpointed)
         let dynamics = match <[Vec<f64>; 4]>::try_from(dynamics) {
@@ -283,7 +305,7 @@ impl Simulation {
         }
         state.scalars.run.area0_body = areas;
         state.scalars.run.remesh_baseline = baselines.flatten().unwrap_or_else(|| vec![None; whole.n_bodies]);
-        Some(Gathered { state, nodal, complete })
+        Some(Gathered { state, nodal, complete, bodies })
     }
 
     /// On a part: continue from `whole`, the whole model's state (a checkpoint's, which every

@@ -67,9 +67,6 @@ pub(super) struct PartSys {
     pub layout: Arc<crate::parallel::part::BodyLayout>,
     /// The reach of its ghosts (mm; a re-mesh grows the part again with it).
     pub reach: f64,
-    /// On rank 0: the bodies re-meshed (whole model's body, new mesh) since the output took
-    /// them last ([`super::Simulation::take_remeshed`]), in the order they were re-meshed.
-    pub remeshed: std::sync::Mutex<Vec<(usize, crate::mesh::Mesh)>>,
     /// The whole model's node and element of each of the part's nodes and elements (to name
     /// a failed element, to gather the output).
     pub whole: crate::model::PartMap,
