@@ -22,6 +22,10 @@ OUT=${OUT:-out}
 mpfem=${MPFEM:-mpfem}
 read -r -a launch <<< "${LAUNCH-mpirun}"
 read -r -a requeue <<< "${REQUEUE:-qrerun}"
+# Open MPI's mpirun kills its ranks 1 s after it passes them a SIGTERM
+# (odls_base_sigkill_timeout = 1), too soon for the checkpoint of a large model (a
+# 4,096-particle checkpoint of 110 MB was cut at 77 MB): give them 120 s.
+export OMPI_MCA_odls_base_sigkill_timeout=${OMPI_MCA_odls_base_sigkill_timeout:-120}
 
 cmd=("$mpfem" run "$CASE" --out "$OUT" --quiet)
 if [ -f "$OUT/checkpoint.h5" ]; then

@@ -30,6 +30,10 @@ if [ "$ranks" -gt 1 ]; then
   launch=("${MPIRUN:-mpirun}" -n "$ranks" --bind-to none)
   [ "$(id -u)" -eq 0 ] && launch+=(--allow-run-as-root)
   [ "$ranks" -gt "$(nproc)" ] && launch+=(--oversubscribe)
+  # Open MPI's mpirun kills its ranks 1 s after it passes them a SIGTERM
+  # (odls_base_sigkill_timeout = 1), too soon for the checkpoint of a large model (a
+  # 4,096-particle checkpoint of 110 MB was cut at 77 MB): give them 120 s.
+  export OMPI_MCA_odls_base_sigkill_timeout=${OMPI_MCA_odls_base_sigkill_timeout:-120}
   cmd=("${launch[@]}" "${cmd[@]}")
 fi
 
