@@ -69,8 +69,18 @@ pub fn proximity_graph(ps: &[Particle]) -> Result<Graph, PartitionError> {
 /// # Panics
 /// If `nparts == 0`.
 pub fn partition_particles(model: &Model, nparts: usize) -> Vec<usize> {
-    assert!(nparts >= 1, "partition_particles: nparts must be at least 1");
-    let graph = particle_graph_or_weights(model);
+    partition_boxes(&particles(model), nparts)
+}
+
+/// [`partition_particles`] of particles `ps` (their element counts and reference boxes,
+/// wherever they come from: a distributed start gathers them without building the whole
+/// model).
+///
+/// # Panics
+/// If `nparts == 0`.
+pub fn partition_boxes(ps: &[Particle], nparts: usize) -> Vec<usize> {
+    assert!(nparts >= 1, "partition_boxes: nparts must be at least 1");
+    let graph = proximity_graph_or_weights(ps);
     let owner = partition::metis_kway(&graph, nparts);
     tracing::info!(
         bodies = graph.n_vertices(),
@@ -194,9 +204,15 @@ fn keep_labels(graph: &Graph, previous: &[usize], new: &[usize], nparts: usize) 
 /// [`particle_graph`], or when it cannot be built (a warning says why) the graph of the element
 /// counts alone, without edges.
 pub fn particle_graph_or_weights(model: &Model) -> Graph {
-    particle_graph(model).unwrap_or_else(|e| {
+    proximity_graph_or_weights(&particles(model))
+}
+
+/// [`proximity_graph`], or when it cannot be built (a warning says why) the graph of the
+/// element counts alone, without edges.
+pub fn proximity_graph_or_weights(ps: &[Particle]) -> Graph {
+    proximity_graph(ps).unwrap_or_else(|e| {
         tracing::warn!("particle graph: {e}; partitioning by element counts only");
-        Graph::from_edges_weighted(model.bodies.iter().map(|b| b.mesh.elements.len() as u64).collect(), &[])
+        Graph::from_edges_weighted(ps.iter().map(|p| p.elements).collect(), &[])
     })
 }
 

@@ -548,11 +548,18 @@ impl Model {
     /// a message naming the body, the wall and how far its farthest node is beyond it. A node
     /// on the wall, or beyond it by round-off (1e-9 of the die's size), is inside.
     pub fn outside_walls(&self) -> Vec<String> {
+        self.outside_walls_by_body().into_iter().map(|(_, m)| m).collect()
+    }
+
+    /// [`Model::outside_walls`] with the body of each message. The round-off is that of the
+    /// whole model's size ([`Model::whole_facts`]), also on a model that holds some of its
+    /// bodies' meshes only.
+    pub fn outside_walls_by_body(&self) -> Vec<(usize, String)> {
         let walls = self.wall_planes(0.0);
         if walls.is_empty() {
             return Vec::new();
         }
-        let size = self.x0.iter().flat_map(|p| [p[0].abs(), p[1].abs()]).chain(walls.iter().flat_map(|w| [w.point[0].abs(), w.point[1].abs()])).fold(0.0, f64::max);
+        let size = walls.iter().flat_map(|w| [w.point[0].abs(), w.point[1].abs()]).fold(self.whole_facts().extent, f64::max);
         let tol = 1e-9 * size.max(1.0);
         let mut out = Vec::new();
         for (i, b) in self.bodies.iter().enumerate() {
@@ -563,16 +570,31 @@ impl Model {
                 if lo < -tol {
                     let side = format!("{:?}", self.loading.walls[w].side).to_lowercase();
                     let how = if hi < -tol { "lies wholly" } else { "reaches" };
-                    out.push(format!(
+                    out.push((i, format!(
                         "bodies[{i}] (\"{}\") {how} beyond walls[{w}] (the {side} wall at {} mm): its farthest node {:.4} mm past it; expected every particle inside the die at the start (move the wall or the particle, or set the grid's or packing's solid_ratio lower)",
                         b.name,
                         self.loading.walls[w].position,
                         -lo
-                    ));
+                    )));
                 }
             }
         }
         out
+    }
+
+    /// The bodies whose meshes have an element of scaled Jacobian below `threshold` and none
+    /// inverted (an inverted one is an error, not a warning), with that smallest scaled
+    /// Jacobian ([`crate::mesh::quality::quality`]); a body without a mesh has none.
+    pub fn poor_meshes(&self, threshold: f64) -> Vec<(usize, f64)> {
+        self.bodies
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.mesh.n_elements() > 0)
+            .filter_map(|(i, b)| {
+                let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
+                (q.n_inverted == 0 && q.min_scaled_jacobian < threshold).then_some((i, q.min_scaled_jacobian))
+            })
+            .collect()
     }
 
     /// Whether the global tangent of this model is symmetric (see [`symmetric_tangent`]; the

@@ -248,16 +248,18 @@ pub const POOR_SCALED_JACOBIAN: f64 = 0.1;
 /// [`LARGE_MODEL_ELEMENTS`] elements, or a particle whose mesh has an element of scaled Jacobian
 /// below [`POOR_SCALED_JACOBIAN`] (not inverted: that is an error). Each names the keys to change.
 pub fn model_warnings(m: &Model) -> Vec<String> {
+    size_and_mesh_warnings(m.elements.len(), m.poor_meshes(POOR_SCALED_JACOBIAN).into_iter().map(|(i, q)| (i, m.bodies[i].name.clone(), q)))
+}
+
+/// [`model_warnings`] of a model of `n_elements` elements whose bodies `poor` (index, name,
+/// smallest scaled Jacobian, [`Model::poor_meshes`]) are poorly meshed.
+fn size_and_mesh_warnings(n_elements: usize, poor: impl Iterator<Item = (usize, String, f64)>) -> Vec<String> {
     let mut w = Vec::new();
-    let n = m.elements.len();
-    if n > LARGE_MODEL_ELEMENTS {
-        w.push(format!("the model has {n} elements (more than {LARGE_MODEL_ELEMENTS}): expect hours a step on one core and gigabytes of memory; a coarser mesh_size (or fewer divisions) makes it smaller"));
+    if n_elements > LARGE_MODEL_ELEMENTS {
+        w.push(format!("the model has {n_elements} elements (more than {LARGE_MODEL_ELEMENTS}): expect hours a step on one core and gigabytes of memory; a coarser mesh_size (or fewer divisions) makes it smaller"));
     }
-    for (i, b) in m.bodies.iter().enumerate() {
-        let q = crate::mesh::quality::quality(&b.mesh, &b.mesh.nodes);
-        if q.n_inverted == 0 && q.min_scaled_jacobian < POOR_SCALED_JACOBIAN {
-            w.push(format!("bodies[{i}] (\"{}\"): its mesh has an element of scaled Jacobian {:.3} (below {POOR_SCALED_JACOBIAN}), which stiffens, locks or inverts early; a smaller mesh_size or other divisions mesh it better", b.name, q.min_scaled_jacobian));
-        }
+    for (i, name, q) in poor {
+        w.push(format!("bodies[{i}] (\"{name}\"): its mesh has an element of scaled Jacobian {q:.3} (below {POOR_SCALED_JACOBIAN}), which stiffens, locks or inverts early; a smaller mesh_size or other divisions mesh it better"));
     }
     w
 }
@@ -551,58 +553,68 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     };
     // with PETSc on several processes each holds its own particles and their neighbours
     // (owned + ghost parts, `Simulation::new_part`); a model a part does not take yet runs
-    // replicated, every process holding all of it, as before
-    let mut whole = None;
+    // replicated, every process holding all of it, as before. (Decided on the case's bodies
+    // without their meshes: a fresh run on parts never builds the whole model, `case::parts`.)
+    let mut parts = false;
     if _petsc.is_some() && comm.size() > 1 {
-        if let Ok(m) = Model::from_case(&c) {
-            let refusal = match m.bodies.len() < comm.size() {
-                true => Some("fewer bodies than processes"),
-                false => Simulation::part_refusal(&m),
-            };
-            match refusal {
-                None => whole = Some(m),
-                Some(what) if root => reporter.note(Note::Info, &format!("every MPI rank holds the whole model: a distributed part does not take {what} yet")),
-                Some(_) => {}
-            }
+        let refusal = match c.bodies.len() < comm.size() {
+            true => Some("fewer bodies than processes"),
+            false => Model::from_case_holding(&c, Some(&[]), &[]).map_or(Some("a case whose model cannot be made"), |skeleton| Simulation::part_refusal(&skeleton)),
+        };
+        match refusal {
+            None => parts = true,
+            Some(what) if root => reporter.note(Note::Info, &format!("every MPI rank holds the whole model: a distributed part does not take {what} yet")),
+            Some(_) => {}
         }
     }
     if !root {
-        return match whole {
-            Some(m) => run_part_rank(&c, m, comm, checkpoint),
-            None => run_rank(&c, comm, checkpoint),
+        return match parts {
+            true => run_part_rank(&c, comm, checkpoint),
+            false => run_rank(&c, comm, checkpoint),
         };
     }
-    let parts = whole.is_some();
     // (held until the run returns)
     let _lock = lock;
-    let model = match whole.take().map_or_else(|| Model::from_case(&c), Ok) {
-        Ok(m) => m,
-        Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
-    };
-    // a particle beyond a wall at the start would be pushed through it or lost (a fresh run;
-    // a restart continues the checkpoint's configuration)
-    if checkpoint.is_none() {
-        if let Some(m) = model.outside_walls().into_iter().next() {
-            return Ok(bad_input(true, reporter, format!("{label}: {m}")));
-        }
-        for w in model_warnings(&model) {
-            reporter.note(Note::Warning, &format!("{label}: {w}"));
-        }
-    }
     let formulation = format!("{:?}", c.formulation);
-    let n_bodies = model.bodies.len();
+    let n_bodies = c.bodies.len();
     let title = c.title.clone();
     let started = Instant::now();
     let ranks = comm.size();
-    // (on parts, rank 0 holds the whole model until the output files are made; then only its
-    // frame, into which the meshes are gathered at the output steps)
-    let (mut sim, resumed, mut whole) = match checkpoint {
-        None if parts => match part_simulation(&model, &c, &comm, None, RankPart::reach(&model)) {
-            Ok(sim) => (sim, None, Some(model)),
+    let whole_model = || Model::from_case(&c).map_err(|e| format!("{label}: {e}"));
+    // (on parts, rank 0 holds the model of the bodies it needs for the output until the
+    // output files are made — the whole model on a restart —; then only its frame, into which
+    // the meshes are gathered at the output steps. `part_reach`: the ghosts' reach of the
+    // parts, kept to grow them again)
+    let (mut sim, resumed, mut whole, part_reach) = match checkpoint {
+        None if parts => match fresh_part(&c, &comm) {
+            Ok(FreshPart { sim, held, reach, poor }) => {
+                for w in size_and_mesh_warnings(sim.model.whole_facts().n_elements, poor.into_iter()) {
+                    reporter.note(Note::Warning, &format!("{label}: {w}"));
+                }
+                (sim, None, held, Some(reach))
+            }
             Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
         },
-        None => (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None, None),
+        None => {
+            let model = match whole_model() {
+                Ok(m) => m,
+                Err(e) => return Ok(bad_input(true, reporter, e)),
+            };
+            // a particle beyond a wall at the start would be pushed through it or lost (a
+            // fresh run; a restart continues the checkpoint's configuration)
+            if let Some(m) = model.outside_walls().into_iter().next() {
+                return Ok(bad_input(true, reporter, format!("{label}: {m}")));
+            }
+            for w in model_warnings(&model) {
+                reporter.note(Note::Warning, &format!("{label}: {w}"));
+            }
+            (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None, None, None)
+        }
         Some(ck) => {
+            let model = match whole_model() {
+                Ok(m) => m,
+                Err(e) => return Ok(bad_input(true, reporter, e)),
+            };
             let (step, time, path) = (ck.step, ck.time, ck.path.clone());
             let state: RunState = match ck.run_state() {
                 Ok(s) => s,
@@ -613,21 +625,22 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 _ => PathBuf::from("."),
             };
             let restored = if parts {
-                ck.model(model).map_err(|e| e.to_string()).and_then(|whole| part_simulation(&whole, &c, &comm, Some(ck.state), RankPart::reach(&whole)).map(|sim| (sim, Some(whole))))
+                ck.model(model).map_err(|e| e.to_string()).and_then(|whole| {
+                    let reach = RankPart::reach(&whole);
+                    part_simulation(&whole, &c, &comm, Some(ck.state), reach).map(|sim| (sim, Some(whole), Some(reach)))
+                })
             } else {
-                ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)).map(|sim| (sim, None)).map_err(|e| e.to_string())
+                ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)).map(|sim| (sim, None, None)).map_err(|e| e.to_string())
             };
-            let (sim, whole) = match restored {
+            let (sim, whole, reach) = match restored {
                 Ok(s) => s,
                 Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
             };
             copy_run_files(&from, out)?;
             reporter.note(Note::Info, &format!("restarting from {} at step {step}, t = {} s", path.display(), seconds(time)));
-            (sim, Some((step, time, path, state)), whole)
+            (sim, Some((step, time, path, state)), whole, reach)
         }
     };
-    // the ghosts' reach of the parts (kept to grow them again)
-    let part_reach = whole.as_ref().map(RankPart::reach);
     // the model the output is written on: the whole one (a part's is its process's share)
     let shown = whole.as_ref().unwrap_or(&sim.model);
     let columns = crate::output::history_columns(shown);
@@ -667,8 +680,8 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     };
     let start = format!(
         "{label}: \"{title}\" — {n_bodies} body(ies), {} elements, {} free dofs, linear solver {}{on_ranks}, end time {} s",
-        shown.elements.len(),
-        if parts { crate::assembly::number_equations(shown.n_dofs(), shown.loading.prescribed.iter().map(|p| p.dof)).1 } else { sim.n_free() },
+        sim.model.whole_facts().n_elements,
+        sim.n_free_whole(),
         sim.linear_solver_name(),
         c.time.end
     );
@@ -1121,21 +1134,51 @@ fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: O
     Ok(sim)
 }
 
+/// What [`fresh_part`] makes.
+struct FreshPart {
+    sim: Simulation,
+    /// (rank 0) the model of the bodies it holds ([`crate::case::parts::PartStart::held`])
+    held: Option<Model>,
+    /// The ghosts' reach.
+    reach: f64,
+    /// (rank 0) the poorly meshed bodies: index, name, smallest scaled Jacobian.
+    poor: Vec<(usize, String, f64)>,
+}
+
+/// This process's simulation of a fresh run on parts, made without the whole model
+/// ([`crate::case::parts::start_part`]); on rank 0 also the model of the bodies it holds (for
+/// the output's columns and frame), and on every process the ghosts' reach and (rank 0) the
+/// poorly meshed bodies. Collective. A case that does not make a model is named by the whole
+/// model's own message on rank 0 ([`Model::from_case`], built then for that alone).
+fn fresh_part(c: &Case, comm: &Arc<dyn Collective>) -> Result<FreshPart, String> {
+    use crate::case::parts::{start_part, StartError};
+    match start_part(c, Arc::clone(comm), POOR_SCALED_JACOBIAN) {
+        Ok(s) => {
+            let reach = s.part.reach;
+            let sim = Simulation::new_part(s.part, c.time, c.solver).map_err(|e| e.to_string())?;
+            Ok(FreshPart { sim, held: s.held, reach, poor: s.poor })
+        }
+        Err(StartError::Model(seen)) if comm.is_root() => Err(Model::from_case(c).err().map(|e| e.to_string()).or(seen).unwrap_or_else(|| "a process could not build its part of the model".into())),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// Ranks 1..N of a run on parts ([`run`] on rank 0): the same part of the same model, the same
 /// collective steps of the output after every step (the flags of rank 0, the gathers), no
 /// output of their own. Returns what the run did; rank 0 says why a setup failed.
-fn run_part_rank(c: &Case, whole: Model, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
-    let (every, probes) = (c.output.every, !whole.probes.is_empty());
-    // (the whole model, and a checkpoint's whole state, only until this process's part is made)
+fn run_part_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+    let (every, probes) = (c.output.every, !c.output.probes.is_empty());
+    // (a restart: the whole model, and the checkpoint's whole state, only until this
+    // process's part is made)
     let (sim, reach) = match checkpoint {
-        None if !whole.outside_walls().is_empty() => return Ok(RunOutcome::BadInput("a particle outside the walls".into())),
-        None => {
-            let reach = RankPart::reach(&whole);
-            (part_simulation(&whole, c, &comm, None, reach), reach)
-        }
-        Some(ck) => match ck.run_state::<RunState>() {
-            Err(e) => (Err(e.to_string()), 0.0),
-            Ok(_) => match ck.model(whole) {
+        None => match fresh_part(c, &comm) {
+            Ok(FreshPart { sim, reach, .. }) => (Ok(sim), reach),
+            Err(e) => (Err(e), 0.0),
+        },
+        Some(ck) => match (ck.run_state::<RunState>(), Model::from_case(c)) {
+            (Err(e), _) => (Err(e.to_string()), 0.0),
+            (_, Err(e)) => return Ok(RunOutcome::BadInput(e.to_string())),
+            (Ok(_), Ok(whole)) => match ck.model(whole) {
                 Ok(w) => {
                     let reach = RankPart::reach(&w);
                     (part_simulation(&w, c, &comm, Some(ck.state), reach), reach)

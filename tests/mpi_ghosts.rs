@@ -291,12 +291,13 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
     // and sends each process its part of a whole-model vector (a restart)
     let scattered = part.scatter_nodes((rank == 0).then_some(&u[..]), 2);
     assert_eq!(scattered, u_part, "every process receives its nodes' values, its ghosts' included");
+    let from_case = part_from_the_case(&comm);
     #[cfg(feature = "petsc")]
     let solve = distributed_solve(&whole, &u, &eval, &part, &u_part, &ep);
     #[cfg(not(feature = "petsc"))]
     let solve = String::new();
     format!(
-        "rank {rank}: {} owned + {n_ghost_bodies} ghost bodies, {} of {} nodes, {} of {} elements, {} pair terms; residual {:.1e} of {scale:.3e}; energy {:.6e}; step fraction {toi}{solve}",
+        "rank {rank}: {} owned + {n_ghost_bodies} ghost bodies, {} of {} nodes, {} of {} elements, {} pair terms; residual {:.1e} of {scale:.3e}; energy {:.6e}; step fraction {toi}; {from_case}{solve}",
         part.n_owned_bodies,
         m.n_nodes(),
         whole.n_nodes(),
@@ -306,6 +307,59 @@ fn rank_work(comm: Arc<dyn Collective>) -> String {
         worst / scale,
         sums[0]
     )
+}
+
+/// The part a fresh run on parts starts with, made from the case without the whole model
+/// (`mpfem::case::parts::start_part`: each process meshes a share of the bodies, the boxes and
+/// counts are gathered, rank 0 partitions them, each process meshes its own bodies, its ghosts
+/// and the bodies the loads, groups and probes name), against the part `RankPart::for_run`
+/// makes of the whole model with the same reach: the same, exactly, on a 6 × 6 disc grid with
+/// a prescribed displacement, a force, a reaction and a displacement group and a point and a
+/// node probe on discs of several processes. Rank 0's model of the bodies it holds makes the
+/// whole model's frame (compared through `Debug`), and with every body's mesh put in it, the
+/// whole model. No process meshes all the bodies.
+fn part_from_the_case(comm: &Arc<dyn Collective>) -> String {
+    let rank = comm.rank();
+    let extra = r#"[[boundary]]
+body = "g0_p7"
+set = "boundary"
+ux = 0.0
+[[loads]]
+body = "g0_p28"
+set = "boundary"
+type = "force"
+value = [0.0, -5.0]
+amplitude = "ramp"
+[output]
+every = 0
+probes = [{ name = "q", point = [52.0, 47.0] }, { name = "n", body = "g0_p33", node = 3 }]
+reactions = ["g0_p7.boundary"]
+displacements = ["g0_p20.boundary"]
+"#;
+    let text = mpfem::bench_support::disc_grid_case(6, 120.0, 0.7, 4.0, extra);
+    let case = mpfem::case::parse(&text, std::path::Path::new(".")).expect("case");
+    let whole = Model::from_case(&case).expect("model");
+    assert!(!whole.loading.prescribed.is_empty() && whole.loading.loads[0].edges.len() > 4 && whole.probes.len() == 2, "the case has its boundary, load and probes");
+    let reach = RankPart::reach(&whole);
+    let reference = RankPart::for_run(&whole, &whole.x0, reach, comm.clone()).expect("the part of the whole model");
+    let start = mpfem::case::parts::start_part(&case, comm.clone(), 0.1).expect("the part made from the case");
+    same_part(&start.part, &reference, "made from the case");
+    assert_eq!(start.part.reach, reach, "rank {rank}: the reach");
+    let held = start.held.as_ref();
+    assert_eq!(held.is_some(), rank == 0, "rank {rank}: rank 0 alone keeps its held bodies");
+    if let Some(h) = held {
+        let meshed = h.bodies.iter().filter(|b| b.mesh.n_nodes() > 0).count();
+        assert!(meshed < whole.bodies.len() && h.n_nodes() < whole.n_nodes(), "rank 0 holds {meshed} of {} bodies' meshes", whole.bodies.len());
+        let frame = h.frame().expect("a frame of the held bodies");
+        assert_eq!(format!("{frame:?}"), format!("{:?}", whole.frame().expect("the whole model's frame")), "the frame of the held bodies is the whole model's");
+        let rebuilt = frame.assemble((0..whole.bodies.len()).map(|k| whole.ghost_body(k)).collect()).expect("the whole model from the frame");
+        assert_eq!(format!("{rebuilt:?}"), format!("{whole:?}"), "the frame and every body's mesh make the whole model");
+    }
+    // the probes and loads are the process's own bodies', as a part of the whole model has them
+    let probes = comm.all_gather_varcount(&[start.part.model.probes.len() as f64, start.part.model.loading.loads[0].edges.len() as f64]);
+    let (n_probes, n_edges): (f64, f64) = probes.chunks_exact(2).fold((0.0, 0.0), |a, c| (a.0 + c[0], a.1 + c[1]));
+    assert_eq!((n_probes as usize, n_edges as usize), (2, whole.loading.loads[0].edges.len()), "each probe and load edge on one process");
+    format!("from the case: {} owned + {} ghost bodies, identical", start.part.n_owned_bodies, start.part.bodies.len() - start.part.n_owned_bodies)
 }
 
 /// That `a` (a part grown again) is `b` (the part made from the whole model), exactly.

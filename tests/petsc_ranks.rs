@@ -285,3 +285,31 @@ fn an_iterative_solve_that_cannot_converge_fails_the_run_cleanly() {
     assert!(out.join("summary.json").is_file(), "no summary.json");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Bad input on owned + ghost parts (2 ranks with MUMPS and the barrier: a fresh run on parts
+/// builds no whole model, `case::parts`) is named as the serial run names it: a particle beyond
+/// a wall (found by the process that meshed it, reported by rank 0) and a probe in no particle
+/// (found by no process: rank 0 builds the whole model for the message) stop the run with
+/// the serial run's exit code and message line, no result written and no panic.
+#[test]
+fn bad_input_on_parts_is_named_as_in_a_serial_run() {
+    let dir = tmpdir("bad_parts");
+    let parts = |t: &str| t.replace("method = \"penalty\"", "method = \"barrier\"").replace("linear = \"pcg\"", "linear = \"petsc\"");
+    let cases = [
+        ("beyond", "wholly beyond walls[0]", variant(&dir, "beyond", CASE_ELASTIC, |t| parts(t).replace("[contact]", "[[bodies]]\nname = \"stray\"\nmaterial = \"alu\"\nmesh_size = 1.0\nshape = { type = \"disc\", center = [-3.0, 95.0], radius = 2.0 }\n\n[contact]"))),
+        ("probe", "output.probes[0].point", variant(&dir, "probe", CASE_ELASTIC, |t| parts(t).replace("[output]\nevery = 0", "[output]\nevery = 0\nprobes = [{ name = \"gap\", point = [50.0, 33.4] }]"))),
+    ];
+    for (name, what, case) in cases {
+        let line = |o: &Output| String::from_utf8_lossy(&o.stderr).lines().find(|l| l.contains(what)).map(str::to_string);
+        let serial = run(&case, None, &dir.join(format!("{name}_1")), &[]);
+        let two = run(&case, Some(2), &dir.join(format!("{name}_2")), &[]);
+        let stderr = String::from_utf8_lossy(&two.stderr);
+        assert!(serial.status.code().is_some_and(|c| c != 0 && c != 1), "{name}: the serial run's exit code {:?}", serial.status);
+        assert_eq!(two.status.code(), serial.status.code(), "{name} on 2 ranks: {stderr}");
+        assert!(line(&serial).is_some(), "{name}: the serial run does not name {what}: {}", String::from_utf8_lossy(&serial.stderr));
+        assert_eq!(line(&two), line(&serial), "{name}: the message on 2 ranks");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!dir.join(format!("{name}_2/history.csv")).exists(), "{name}: a history was written");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

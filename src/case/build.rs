@@ -89,13 +89,33 @@ impl Model {
     /// # Errors
     /// A body whose shape cannot be meshed, an edge set that does not exist.
     pub fn from_case(case: &Case) -> Result<Self, ModelError> {
+        Self::from_case_holding(case, None, &[])
+    }
+
+    /// The model of a validated case in which only the bodies `held` marks (one flag a body;
+    /// `None`: every body) are meshed: the others keep their names, materials and mesh sizes
+    /// but no nodes or elements, their prescribed displacements, loads and output groups are
+    /// empty, and the probes in them are left out. What a process of a distributed run builds
+    /// of the case ([`crate::case::parts`]), so that none holds the whole mesh. The amplitudes,
+    /// walls and parameters are the whole model's, and the numbering is that of the held
+    /// bodies one after the other. `pins` places point probes in a body: (probe, body), the
+    /// body the whole model would find the point in (the first body holding it).
+    ///
+    /// # Errors
+    /// As [`Model::from_case`], for the held bodies (a point probe that no held body holds is
+    /// left out, not an error, when not every body is held).
+    pub fn from_case_holding(case: &Case, held: Option<&[bool]>, pins: &[(usize, usize)]) -> Result<Self, ModelError> {
+        let present = |b: usize| held.is_none_or(|h| h.get(b).copied().unwrap_or(false));
         let mut bodies = Vec::with_capacity(case.bodies.len());
         let mut x0 = Vec::new();
         let mut elements = Vec::new();
         let mut elem_material = Vec::new();
         let mut elem_body = Vec::new();
         for (ib, b) in case.bodies.iter().enumerate() {
-            let mesh = mesh_body(b).map_err(|message| ModelError::Mesh { body: ib, name: b.name.clone(), message })?;
+            let mesh = match present(ib) {
+                true => mesh_body(b).map_err(|message| ModelError::Mesh { body: ib, name: b.name.clone(), message })?,
+                false => Mesh::default(),
+            };
             let node_offset = x0.len();
             let elem_offset = elements.len();
             x0.extend_from_slice(&mesh.nodes);
@@ -104,7 +124,7 @@ impl Model {
                 elem_material.push(b.material);
                 elem_body.push(ib);
             }
-            let contact_h = Body::mean_element_size(&mesh);
+            let contact_h = if present(ib) { Body::mean_element_size(&mesh) } else { f64::INFINITY };
             bodies.push(Body { name: b.name.clone(), mesh, material: b.material, node_offset, elem_offset, mesh_size: b.mesh_size, contact_h });
         }
 
@@ -115,6 +135,9 @@ impl Model {
         };
 
         let global_set = |key: &str, body: usize, set: &str| -> Result<(Vec<usize>, Vec<[usize; 2]>), ModelError> {
+            if !present(body) {
+                return Ok((Vec::new(), Vec::new()));
+            }
             let b = &bodies[body];
             let edges = b.mesh.edge_sets.get(set).ok_or_else(|| ModelError::MissingSet {
                 key: key.to_string(),
@@ -185,7 +208,15 @@ impl Model {
         for (i, p) in case.output.probes.iter().enumerate() {
             let at = match p.at {
                 ProbeSpecAt::Point { point, body } => {
-                    let (element, xi) = crate::model::locate(&x0, &elements, &elem_body, point, body).ok_or_else(|| ModelError::Probe {
+                    let body = pins.iter().find(|&&(k, _)| k == i).map(|&(_, b)| b).or(body);
+                    let found = match body {
+                        Some(b) if !present(b) => continue,
+                        _ => crate::model::locate(&x0, &elements, &elem_body, point, body),
+                    };
+                    if found.is_none() && held.is_some() {
+                        continue;
+                    }
+                    let (element, xi) = found.ok_or_else(|| ModelError::Probe {
                         key: format!("output.probes[{i}].point"),
                         message: format!(
                             "value [{}, {}]; expected a point inside {} in the reference configuration",
@@ -197,6 +228,9 @@ impl Model {
                     ProbeAt::Point { element, xi }
                 }
                 ProbeSpecAt::Node { body, node } => {
+                    if !present(body) {
+                        continue;
+                    }
                     let n = bodies[body].mesh.n_nodes();
                     if node >= n {
                         return Err(ModelError::Probe { key: format!("output.probes[{i}].node"), message: format!("value {node}; expected a node of body \"{}\", 0 to {}", bodies[body].name, n - 1) });

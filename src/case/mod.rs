@@ -30,6 +30,7 @@ use thiserror::Error;
 
 mod build;
 mod expand;
+pub mod parts;
 mod raw;
 mod validate;
 

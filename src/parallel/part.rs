@@ -13,7 +13,7 @@
 //! them, and an [`IndexMap`] moves values between the owners and the ghosts.
 
 use crate::comm::{Collective, IndexMap, IndexMapError};
-use crate::model::{Body, GhostBody, Model, ModelError, PartMap};
+use crate::model::{Body, GhostBody, Model, ModelError, PartMap, WholeModel};
 use crate::mesh::Mesh;
 use std::sync::Arc;
 
@@ -154,8 +154,9 @@ impl BodyLayout {
     }
 
     /// The layout of bodies owned by `owner` with `sizes` (nodes, elements, boundary edges)
-    /// and `fixed` prescribed dofs each, numbered in body order.
-    fn from_sizes(owner: Vec<usize>, sizes: Vec<(usize, usize, usize)>, fixed: &[usize]) -> Self {
+    /// and `fixed` prescribed dofs each, numbered in body order (its `edge_cut` 0: the caller
+    /// counts it).
+    pub fn from_sizes(owner: Vec<usize>, sizes: Vec<(usize, usize, usize)>, fixed: &[usize]) -> Self {
         let prefix = |f: &dyn Fn(&(usize, usize, usize)) -> usize| -> Vec<usize> {
             std::iter::once(0)
                 .chain(sizes.iter().scan(0, |at, s| {
@@ -296,11 +297,56 @@ impl RankPart {
     /// must hold every body within d̂ + h of an own one at the start of every step (checked
     /// then); the margin lets the particles move some steps before a new ghost is needed.
     pub fn reach(whole: &Model) -> f64 {
-        let mut sizes: Vec<f64> = crate::distribute::particles(whole).iter().map(|p| (p.max[0] - p.min[0]).max(p.max[1] - p.min[1])).collect();
+        Self::reach_of(&crate::distribute::particles(whole), whole.whole_facts().h_min)
+    }
+
+    /// [`RankPart::reach`] of bodies whose reference boxes are `boxes` and whose smallest
+    /// contact length is `h_min`.
+    pub fn reach_of(boxes: &[partition::Particle], h_min: f64) -> f64 {
+        let mut sizes: Vec<f64> = boxes.iter().map(|p| (p.max[0] - p.min[0]).max(p.max[1] - p.min[1])).collect();
         sizes.sort_by(f64::total_cmp);
         let median = sizes.get(sizes.len() / 2).copied().unwrap_or(0.0);
-        let h = whole.whole_facts().h_min;
-        (0.25 * median).max(if h.is_finite() { 4.0 * h } else { 0.0 })
+        (0.25 * median).max(if h_min.is_finite() { 4.0 * h_min } else { 0.0 })
+    }
+
+    /// This process's part made from `held`, a model of the whole model's bodies in which at
+    /// least this process's own bodies `owned` and its ghosts `ghosts` (both ascending) are
+    /// meshed (the others may be empty: [`crate::case`]'s distributed start meshes no more),
+    /// laid out by `layout` (every process's alike) and with the whole model's `facts`: the
+    /// part [`RankPart::new`] makes of the whole model with the same owners and ghosts, without
+    /// it. Collective.
+    ///
+    /// # Errors
+    /// A body of `owned` or `ghosts` out of range, listed twice or whose size is not the
+    /// layout's; an owner that is not `layout`'s.
+    pub fn from_held(held: &Model, owned: &[usize], ghosts: &[usize], layout: Arc<BodyLayout>, facts: WholeModel, reach: f64, comm: Arc<dyn Collective>) -> Result<Self, PartError> {
+        let (rank, size) = (comm.rank(), comm.size());
+        let bodies: Vec<usize> = owned.iter().chain(ghosts).copied().collect();
+        let mut problem = None;
+        if layout.owner.len() != held.bodies.len() || layout.owner.iter().any(|&o| o >= size) {
+            problem = Some(format!("{} owners for {} bodies on {size} processes", layout.owner.len(), held.bodies.len()));
+        } else if let Some(&b) = bodies.iter().find(|&&b| held.bodies.get(b).map(|x| x.mesh.n_nodes()) != layout.n_nodes.get(b).copied()) {
+            problem = Some(format!("body {b} is not held with the layout's size"));
+        } else if let Some(&b) = owned.iter().find(|&&b| layout.owner[b] != rank) {
+            problem = Some(format!("body {b} is not process {rank}'s"));
+        }
+        // (every process goes on to the node map, so that none waits for one that failed)
+        let failed = comm.max(if problem.is_some() { 1.0 } else { 0.0 }) > 0.0;
+        let numbering = DistributedNumbering::new(&layout.owner, &layout.n_nodes, size);
+        let ghost_nodes: Vec<usize> = if failed { Vec::new() } else { ghosts.iter().flat_map(|&b| numbering.body_start[b]..numbering.body_start[b] + layout.n_nodes[b]).collect() };
+        let nodes = IndexMap::new(Arc::clone(&comm), if failed { 0 } else { numbering.rank_nodes[rank] }, ghost_nodes)?;
+        if failed {
+            return Err(PartError::Owners(problem.unwrap_or_else(|| "on another process".into())));
+        }
+        let (mut model, _) = held.part(&bodies, owned.len())?;
+        model.whole = Some(facts);
+        let mut whole = PartMap::default();
+        for (b, &g) in model.bodies.iter().zip(&bodies) {
+            whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
+            whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
+        }
+        let whole_eq = whole_equations(&model, &bodies, owned.len(), &layout, &nodes);
+        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole, whole_eq, layout, reach })
     }
 
     /// This process's part of `whole`, whose bodies are owned by `owner` (every process's

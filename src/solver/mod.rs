@@ -669,6 +669,12 @@ impl Simulation {
         self.sys.assembler.n_free
     }
 
+    /// The whole model's free equations: [`Simulation::n_free`], or on parts those of every
+    /// process together.
+    pub fn n_free_whole(&self) -> usize {
+        self.sys.part.as_ref().map_or(self.sys.assembler.n_free, |p| p.eqs.n_global())
+    }
+
     /// Whether every process takes part in the linear solves (the Schwarz PCG on several
     /// processes) rather than rank 0 alone.
     pub fn solves_distributed(&self) -> bool {

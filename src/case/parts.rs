@@ -1,0 +1,224 @@
+//! The start of a run on owned + ghost parts without the whole model.
+//!
+//! Every process reads the case, whose bodies are a few numbers each; none meshes them all:
+//!
+//! 1. each process meshes every `size`-th body (its rank's share, round robin) and all the
+//!    processes gather what the partition and the layout need of every body (box, node,
+//!    element and boundary-edge counts, prescribed dofs, contact length, Young's modulus,
+//!    extent: twelve numbers a body), where each point probe is, which particles lie beyond a
+//!    wall and which meshes are poor;
+//! 2. rank 0 partitions the boxes (METIS, as [`crate::distribute::partition_particles`] does on
+//!    the whole model) and broadcasts the owners;
+//! 3. each process meshes its own bodies, its ghosts (those within the parts' reach,
+//!    [`RankPart::reach_of`]) and the few bodies that loads, output groups and probes name,
+//!    and makes its part of that model ([`RankPart::from_held`]).
+//!
+//! The part is the one [`RankPart::for_run`] makes of the whole model (`tests/mpi_ghosts.rs`
+//! compares them field by field on 4 processes), and rank 0 keeps the model of its held bodies
+//! for the output's columns and frame ([`crate::model::Model::frame`]). The largest thing a
+//! process builds is its part plus a share of the bodies, never the whole mesh.
+
+use super::{Case, ProbeSpecAt};
+use crate::comm::Collective;
+use crate::model::{Model, WholeModel};
+use crate::parallel::part::{BodyLayout, PartError, RankPart};
+use std::sync::Arc;
+
+/// What a process of a run on parts starts with ([`start_part`]).
+pub struct PartStart {
+    /// Its part.
+    pub part: RankPart,
+    /// On rank 0: the model of the bodies it holds (its own, its ghosts and those that loads,
+    /// output groups and probes name, the others without meshes, [`Model::from_case_holding`])
+    /// with every load, output group and probe of the whole model: the output files' columns
+    /// and the frame of the whole model are made of it. `None` elsewhere.
+    pub held: Option<Model>,
+    /// On rank 0: the bodies whose meshes are poor (index, name, smallest scaled Jacobian,
+    /// [`Model::poor_meshes`]), in body order.
+    pub poor: Vec<(usize, String, f64)>,
+}
+
+/// Why a process could not start its part.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    /// The case does not make a model on some process (this one's message, if it saw it;
+    /// [`Model::from_case`] on the whole case gives the message of the first body that fails).
+    #[error("the model: {}", .0.as_deref().unwrap_or("on another process"))]
+    Model(Option<String>),
+    /// A particle lies beyond a wall at the start: the message of the first (in body order) on
+    /// rank 0 ([`Model::outside_walls`]).
+    #[error("{}", .0.as_deref().unwrap_or("a particle lies beyond a wall (rank 0 names it)"))]
+    Outside(Option<String>),
+    #[error(transparent)]
+    Part(#[from] PartError),
+}
+
+/// Numbers a body in the gathered facts: body, nodes, elements, boundary edges, prescribed
+/// dofs, contact length, Young's modulus, extent, box (x min, y min, x max, y max).
+const FACTS: usize = 12;
+
+/// This process's part of the model of `case` for a fresh run on owned + ghost parts (see the
+/// module docs): the bodies partitioned by METIS (rank 0's, broadcast), the ghosts within
+/// [`RankPart::reach_of`] of its own bodies in the reference configuration; the meshes with an
+/// element of scaled Jacobian below `poor_below` are reported to rank 0. Collective; every
+/// process returns an error when one fails.
+///
+/// # Errors
+/// A body that cannot be meshed or a set or probe the case names that does not exist
+/// ([`StartError::Model`]), a particle beyond a wall, a process without a body, or what
+/// [`RankPart::from_held`] refuses.
+pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Result<PartStart, StartError> {
+    let (rank, size) = (comm.rank(), comm.size());
+    let nb = case.bodies.len();
+    // 1. this process's share of the bodies, and what every process needs of each
+    let share: Vec<bool> = (0..nb).map(|b| b % size == rank).collect();
+    let shared = Model::from_case_holding(case, Some(&share), &[]);
+    let failed = comm.max(if shared.is_err() { 1.0 } else { 0.0 }) > 0.0;
+    let mut shared = match (shared, failed) {
+        (Ok(m), false) => m,
+        (Err(e), _) => return Err(StartError::Model(Some(e.to_string()))),
+        (Ok(_), true) => return Err(StartError::Model(None)),
+    };
+    let boxes = crate::distribute::particles(&shared);
+    let mut mine = Vec::with_capacity(FACTS * nb.div_ceil(size));
+    for (b, body) in shared.bodies.iter().enumerate().filter(|&(b, _)| share[b]) {
+        let nodes = body.node_offset..body.node_offset + body.mesh.n_nodes();
+        let fixed = shared.loading.prescribed.iter().filter(|p| nodes.contains(&(p.dof / 2))).count();
+        let extent = shared.x0[nodes].iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max);
+        let e = shared.materials[body.material].youngs_modulus();
+        let bx = &boxes[b];
+        mine.extend([b as f64, body.mesh.n_nodes() as f64, body.mesh.n_elements() as f64, body.mesh.boundary.len() as f64, fixed as f64, body.contact_h, e, extent, bx.min[0], bx.min[1], bx.max[0], bx.max[1]]);
+    }
+    let all = comm.all_gather_varcount(&mine);
+    drop(mine);
+    let mut boxes = vec![partition::Particle { elements: 0, min: [0.0; 2], max: [0.0; 2] }; nb];
+    let mut sizes = vec![(0, 0, 0); nb];
+    let mut fixed = vec![0; nb];
+    let mut seen = vec![false; nb];
+    let mut facts = WholeModel { n_bodies: nb, n_nodes: 0, n_elements: 0, h_min: f64::INFINITY, e_min: f64::INFINITY, extent: 0.0 };
+    for r in all.chunks_exact(FACTS) {
+        let b = r[0] as usize;
+        let (nn, ne) = (r[1] as usize, r[2] as usize);
+        sizes[b] = (nn, ne, r[3] as usize);
+        fixed[b] = r[4] as usize;
+        boxes[b] = partition::Particle { elements: ne as u64, min: [r[8], r[9]], max: [r[10], r[11]] };
+        seen[b] = true;
+        facts.n_nodes += nn;
+        facts.n_elements += ne;
+        facts.h_min = facts.h_min.min(r[5]);
+        facts.e_min = facts.e_min.min(r[6]);
+        facts.extent = facts.extent.max(r[7]);
+    }
+    drop(all);
+    if seen.iter().any(|s| !s) {
+        return Err(StartError::Model(Some(format!("{} of {nb} bodies were not gathered", seen.iter().filter(|s| !**s).count()))));
+    }
+    // where the point probes are: the first body holding the point, as the whole model finds it
+    let mut found = Vec::new();
+    for (i, p) in case.output.probes.iter().enumerate() {
+        if let ProbeSpecAt::Point { point, body } = p.at {
+            if let Some((e, _)) = shared.locate(point, body) {
+                found.extend([i as f64, shared.elem_body[e] as f64]);
+            }
+        }
+    }
+    let found = comm.all_gather_varcount(&found);
+    let mut pins: Vec<(usize, usize)> = Vec::new();
+    for f in found.chunks_exact(2) {
+        let (i, b) = (f[0] as usize, f[1] as usize);
+        match pins.iter_mut().find(|p| p.0 == i) {
+            Some(p) => p.1 = p.1.min(b),
+            None => pins.push((i, b)),
+        }
+    }
+    // (a point no body holds: the whole model's error names it)
+    if case.output.probes.iter().enumerate().any(|(i, p)| matches!(p.at, ProbeSpecAt::Point { .. }) && !pins.iter().any(|q| q.0 == i)) {
+        return Err(StartError::Model(None));
+    }
+    // particles beyond a wall, and poor meshes: to rank 0, in body order
+    shared.whole = Some(facts);
+    let outside: Vec<(usize, String)> = shared.outside_walls_by_body();
+    let n_outside = comm.max(outside.len() as f64);
+    let outside = texts_to_root(&*comm, &outside);
+    let poor: Vec<f64> = shared.poor_meshes(poor_below).into_iter().flat_map(|(b, q)| [b as f64, q]).collect();
+    let mut poor: Vec<(usize, String, f64)> = comm.gather_varcount_to_root(&poor).chunks_exact(2).map(|c| (c[0] as usize, case.bodies[c[0] as usize].name.clone(), c[1])).collect();
+    poor.sort_by_key(|p| p.0);
+    drop(shared);
+    if n_outside > 0.0 {
+        return Err(StartError::Outside(outside.into_iter().next().map(|(_, m)| m)));
+    }
+    // 2. the owners (rank 0's partition) and the close pairs they split
+    let mut owner = vec![0.0; nb + 1];
+    if comm.is_root() {
+        let own = crate::distribute::partition_boxes(&boxes, size);
+        let cut = crate::distribute::proximity_graph(&boxes).map_or(0, |g| partition::edge_cut(&g, &own));
+        for (o, &p) in owner.iter_mut().zip(&own) {
+            *o = p as f64;
+        }
+        owner[nb] = cut as f64;
+    }
+    comm.broadcast(&mut owner);
+    let edge_cut = owner.pop().map_or(0, |c| c as usize);
+    let owner: Vec<usize> = owner.iter().map(|&o| o as usize).collect();
+    if let Some(idle) = (0..size).find(|&r| !owner.contains(&r)) {
+        return Err(PartError::Owners(format!("process {idle} owns none of the {nb} bodies (every process of a distributed run needs one)")).into());
+    }
+    let layout = Arc::new(BodyLayout { edge_cut, ..BodyLayout::from_sizes(owner.clone(), sizes, &fixed) });
+    // 3. this process's bodies, its ghosts and the named ones, meshed; its part of them
+    let reach = RankPart::reach_of(&boxes, facts.h_min);
+    let ghosts = crate::parallel::part::ghost_bodies(&boxes, &owner, rank, reach).map_err(PartError::from)?;
+    drop(boxes);
+    let owned: Vec<usize> = (0..nb).filter(|&b| owner[b] == rank).collect();
+    let mut held = vec![false; nb];
+    for &b in owned.iter().chain(&ghosts).chain(named_bodies(case, &pins).iter()) {
+        held[b] = true;
+    }
+    let model = Model::from_case_holding(case, Some(&held), &pins);
+    let failed = comm.max(if model.is_err() { 1.0 } else { 0.0 }) > 0.0;
+    let model = match (model, failed) {
+        (Ok(m), false) => m,
+        (Err(e), _) => return Err(StartError::Model(Some(e.to_string()))),
+        (Ok(_), true) => return Err(StartError::Model(None)),
+    };
+    let part = RankPart::from_held(&model, &owned, &ghosts, layout, facts, reach, Arc::clone(&comm))?;
+    let held = comm.is_root().then_some(model);
+    Ok(PartStart { part, held, poor })
+}
+
+/// The bodies that loads, output groups and probes name (point probes: where `pins` places
+/// them), ascending: every process holds them, so that the loads, groups and probes of its own
+/// bodies are the whole model's, and rank 0 makes the output's frame of them.
+fn named_bodies(case: &Case, pins: &[(usize, usize)]) -> Vec<usize> {
+    let mut b: Vec<usize> = case.loads.iter().map(|l| l.body).chain(case.output.reactions.iter().chain(&case.output.displacements).map(|g| g.0)).collect();
+    for (i, p) in case.output.probes.iter().enumerate() {
+        match p.at {
+            ProbeSpecAt::Node { body, .. } => b.push(body),
+            ProbeSpecAt::Point { .. } => b.extend(pins.iter().filter(|q| q.0 == i).map(|q| q.1)),
+        }
+    }
+    b.sort_unstable();
+    b.dedup();
+    b
+}
+
+/// `items` (an index and a text each) of every process on rank 0, ordered by index (empty
+/// elsewhere). Collective.
+fn texts_to_root(comm: &dyn Collective, items: &[(usize, String)]) -> Vec<(usize, String)> {
+    let mut mine = Vec::new();
+    for (i, t) in items {
+        mine.push(*i as f64);
+        mine.push(t.len() as f64);
+        mine.extend(t.bytes().map(f64::from));
+    }
+    let all = comm.gather_varcount_to_root(&mine);
+    let mut out = Vec::new();
+    let mut at = &all[..];
+    while at.len() >= 2 {
+        let (i, n) = (at[0] as usize, at[1] as usize);
+        let bytes: Vec<u8> = at[2..(2 + n).min(at.len())].iter().map(|&v| v as u8).collect();
+        out.push((i, String::from_utf8_lossy(&bytes).into_owned()));
+        at = &at[(2 + n).min(at.len())..];
+    }
+    out.sort_by_key(|t| t.0);
+    out
+}
