@@ -1057,16 +1057,21 @@ const OUTPUT_FAILED_ON_ROOT: &str = "output failed on rank 0";
 /// Every process's peak resident memory (MB, `VmHWM` of `/proc/self/status`), on rank 0 in
 /// rank order (empty elsewhere, and where the system does not tell). Collective.
 fn peak_memory(comm: &dyn Collective) -> Vec<f64> {
-    let own = std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)).and_then(|v| v.parse::<f64>().ok()))
-        .map_or(f64::NAN, |kb| kb / 1024.0);
-    let all = comm.gather_varcount_to_root(&[own]);
+    let all = comm.gather_varcount_to_root(&[own_peak_memory()]);
     if all.iter().all(|v| v.is_finite()) {
         all
     } else {
         Vec::new()
     }
+}
+
+/// This process's peak resident memory so far (MB, `VmHWM` of `/proc/self/status`; NaN where
+/// the system does not tell).
+fn own_peak_memory() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)).and_then(|v| v.parse::<f64>().ok()))
+        .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
 /// After a converged step: rank 0's stop signal (0: none) and whether a checkpoint is due, the
@@ -1152,9 +1157,18 @@ struct FreshPart {
 /// model's own message on rank 0 ([`Model::from_case`], built then for that alone).
 fn fresh_part(c: &Case, comm: &Arc<dyn Collective>) -> Result<FreshPart, String> {
     use crate::case::parts::{start_part, StartError};
+    let t = Instant::now();
     match start_part(c, Arc::clone(comm), POOR_SCALED_JACOBIAN) {
         Ok(s) => {
             let reach = s.part.reach;
+            tracing::info!(
+                seconds = t.elapsed().as_secs_f64(),
+                own_bodies = s.part.n_owned_bodies,
+                ghost_bodies = s.part.bodies.len() - s.part.n_owned_bodies,
+                nodes = s.part.model.n_nodes(),
+                peak_memory_mb = own_peak_memory(),
+                "this process's part is made from the case (no process built the whole model)"
+            );
             let sim = Simulation::new_part(s.part, c.time, c.solver).map_err(|e| e.to_string())?;
             Ok(FreshPart { sim, held: s.held, reach, poor: s.poor })
         }
