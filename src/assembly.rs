@@ -215,17 +215,27 @@ impl Assembler {
     /// changed.
     pub fn set_terms(&mut self, kk: &mut CsrMatrix, blocks: &[Vec<usize>], multipliers: &[Vec<usize>]) -> bool {
         let eq = &self.eq;
+        // (entries the elements couple already are not kept; the list is sorted and
+        // de-duplicated whenever it has doubled, so that it never holds many more entries than
+        // the distinct ones: a block list repeats most entries many times)
+        let in_base = |r: usize, c: usize| r < self.n_free && self.base_cols[self.base_rows[r]..self.base_rows[r + 1]].binary_search(&c).is_ok();
         let mut extra: Vec<(usize, usize)> = Vec::new();
+        let mut compacted = 0;
         for dofs in blocks {
             for &i in dofs {
                 if eq[i] == FIXED {
                     continue;
                 }
                 for &j in dofs {
-                    if eq[j] != FIXED {
+                    if eq[j] != FIXED && !in_base(eq[i], eq[j]) {
                         extra.push((eq[i], eq[j]));
                     }
                 }
+            }
+            if extra.len() > 2 * compacted + 4096 {
+                extra.sort_unstable();
+                extra.dedup();
+                compacted = extra.len();
             }
         }
         for (k, dofs) in multipliers.iter().enumerate() {

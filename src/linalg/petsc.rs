@@ -360,51 +360,81 @@ mod imp {
                 }
             }
             let got = map.comm().exchange(&out);
-            // every entry of the own rows: (row, column, where from: own k, or (process, index))
-            enum From {
-                Own(usize),
-                Sent(usize, usize),
-            }
-            let mut entries: Vec<(usize, usize, From)> = Vec::new();
-            for i in 0..n_own {
-                for k in a.row_ptr[i]..a.row_ptr[i + 1] {
-                    entries.push((i, map.global(a.col_idx[k]), From::Own(k)));
-                }
-            }
+            drop(out);
+            // the entries the other processes send for this process's rows, grouped by row:
+            // (column, source), the source numbering a's own entries first (k) and then the
+            // received ones, process by process in the order sent — so that sorting a row's
+            // entries by (column, source) puts the sources of an entry in the order its value
+            // is summed in (the own one first). Counted first, so that nothing grows.
+            let n_a = a.row_ptr[n_own];
+            let mut recv_ptr = vec![0usize; n_own + 1];
+            let mut offset = Vec::with_capacity(got.len() + 1);
+            offset.push(n_a);
             for (q, buf) in got.iter().enumerate() {
-                let (mut at, mut index) = (0, 0);
-                while at < buf.len() {
+                let (mut at, mut n) = (0, 0);
+                while at + 1 < buf.len() {
                     let (row, count) = (buf[at] as usize, buf[at + 1] as usize);
                     if !(start..start + n_own).contains(&row) || at + 2 + count > buf.len() {
                         return Err(LinalgError::Other(format!("process {q} sent row {row}, which is not one of this process's {start}..{}", start + n_own)));
                     }
+                    recv_ptr[row - start + 1] += count;
+                    n += count;
+                    at += 2 + count;
+                }
+                if at != buf.len() {
+                    return Err(LinalgError::Other(format!("process {q} sent a cut row pattern")));
+                }
+                offset.push(offset[q] + n);
+            }
+            for r in 0..n_own {
+                recv_ptr[r + 1] += recv_ptr[r];
+            }
+            let mut recv_items = vec![(0usize, 0usize); recv_ptr[n_own]];
+            let mut fill = recv_ptr.clone();
+            for (q, buf) in got.iter().enumerate() {
+                let (mut at, mut index) = (0, 0);
+                while at < buf.len() {
+                    let (row, count) = (buf[at] as usize - start, buf[at + 1] as usize);
                     for c in &buf[at + 2..at + 2 + count] {
-                        entries.push((row - start, *c as usize, From::Sent(q, index)));
+                        recv_items[fill[row]] = (*c as usize, offset[q] + index);
+                        fill[row] += 1;
                         index += 1;
                     }
                     at += 2 + count;
                 }
             }
-            entries.sort_by_key(|e| (e.0, e.1));
+            drop(fill);
             let mut row_ptr = vec![0usize; n_own + 1];
-            let mut cols = Vec::new();
-            let mut own = Vec::new();
+            let mut cols = Vec::with_capacity(n_a + recv_items.len());
+            let mut own = Vec::with_capacity(n_a);
             let mut recv: Vec<Vec<usize>> = got.iter().map(|_| Vec::new()).collect();
-            let mut received: Vec<Vec<(usize, usize)>> = got.iter().map(|_| Vec::new()).collect();
-            let mut last = None;
-            for (row, col, from) in entries {
-                // (the same entry again is one more source of its value)
-                if last != Some((row, col)) {
-                    cols.push(col);
-                    row_ptr[row + 1] += 1;
-                    last = Some((row, col));
-                }
-                let e = cols.len() - 1;
-                match from {
-                    From::Own(k) => own.push((e, k)),
-                    From::Sent(q, index) => received[q].push((index, e)),
+            let mut received: Vec<Vec<(usize, usize)>> = got.iter().map(|b| Vec::with_capacity(b.len())).collect();
+            drop(got);
+            // row by row: its own entries (global columns) and the received ones, sorted
+            let mut row_entries: Vec<(usize, usize)> = Vec::new();
+            for i in 0..n_own {
+                row_entries.clear();
+                row_entries.extend((a.row_ptr[i]..a.row_ptr[i + 1]).map(|k| (map.global(a.col_idx[k]), k)));
+                row_entries.extend_from_slice(&recv_items[recv_ptr[i]..recv_ptr[i + 1]]);
+                row_entries.sort_unstable();
+                let mut last = None;
+                for &(col, from) in &row_entries {
+                    // (the same entry again is one more source of its value)
+                    if last != Some(col) {
+                        cols.push(col);
+                        row_ptr[i + 1] += 1;
+                        last = Some(col);
+                    }
+                    let e = cols.len() - 1;
+                    if from < n_a {
+                        own.push((e, from));
+                    } else {
+                        let q = offset.partition_point(|&o| o <= from) - 1;
+                        received[q].push((from - offset[q], e));
+                    }
                 }
             }
+            drop(recv_items);
             for r in 0..n_own {
                 row_ptr[r + 1] += row_ptr[r];
             }
