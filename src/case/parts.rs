@@ -28,10 +28,10 @@ use std::sync::Arc;
 pub struct PartStart {
     /// Its part.
     pub part: RankPart,
-    /// On rank 0: the model of the bodies it holds (its own, its ghosts and those that loads,
-    /// output groups and probes name, the others without meshes, [`Model::from_case_holding`])
-    /// with every load, output group and probe of the whole model: the output files' columns
-    /// and the frame of the whole model are made of it. `None` elsewhere.
+    /// On rank 0: the model of the bodies that loads, output groups and probes name (the others
+    /// without meshes, [`Model::from_case_holding`]) with every load, output group and probe of
+    /// the whole model: the output files' columns and the frame of the whole model are made of
+    /// it. `None` elsewhere.
     pub held: Option<Model>,
     /// On rank 0: the bodies whose meshes are poor (index, name, smallest scaled Jacobian,
     /// [`Model::poor_meshes`]), in body order.
@@ -169,8 +169,9 @@ pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Re
     let ghosts = crate::parallel::part::ghost_bodies(&boxes, &owner, rank, reach).map_err(PartError::from)?;
     drop(boxes);
     let owned: Vec<usize> = (0..nb).filter(|&b| owner[b] == rank).collect();
+    let named = named_bodies(case, &pins);
     let mut held = vec![false; nb];
-    for &b in owned.iter().chain(&ghosts).chain(named_bodies(case, &pins).iter()) {
+    for &b in owned.iter().chain(&ghosts).chain(&named) {
         held[b] = true;
     }
     let model = Model::from_case_holding(case, Some(&held), &pins);
@@ -181,7 +182,15 @@ pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Re
         (Ok(_), true) => return Err(StartError::Model(None)),
     };
     let part = RankPart::from_held(&model, &owned, &ghosts, layout, facts, reach, Arc::clone(&comm))?;
-    let held = comm.is_root().then_some(model);
+    drop(model);
+    // (rank 0's output needs the named bodies only: the others' meshes are its part's)
+    let held = match comm.is_root() {
+        true => {
+            held.iter_mut().enumerate().for_each(|(b, h)| *h = named.binary_search(&b).is_ok());
+            Some(Model::from_case_holding(case, Some(&held), &pins).map_err(|e| StartError::Model(Some(e.to_string())))?)
+        }
+        false => None,
+    };
     Ok(PartStart { part, held, poor })
 }
 
