@@ -155,10 +155,11 @@ mod imp {
         /// in PETSc's order, and for every entry of the local CSR handed to PETSc its position
         /// in the tangent's values.
         Whole { global: Vec<usize>, local_rows: Vec<usize>, source: Vec<usize> },
-        /// A part: the (entry, position in the part's values) of its own rows' values; per
+        /// A part: the position in the part's values of each entry of its own rows (every one
+        /// has its own position: an own row's columns are distinct); per
         /// process, the positions of the values of the ghost rows it owns, in the order they are
         /// sent, and the entries the values received from it go to.
-        Part { map: std::sync::Arc<crate::comm::IndexMap>, own: Vec<(usize, usize)>, send: Vec<Vec<usize>>, recv: Vec<Vec<usize>>, row_ptr: Vec<usize> },
+        Part { map: std::sync::Arc<crate::comm::IndexMap>, own: Vec<usize>, send: Vec<Vec<usize>>, recv: Vec<Vec<usize>>, row_ptr: Vec<usize> },
     }
 
     /// A row's dof (reference position and direction; None: a multiplier) and its particle.
@@ -406,7 +407,7 @@ mod imp {
             drop(fill);
             let mut row_ptr = vec![0usize; n_own + 1];
             let mut cols = Vec::with_capacity(n_a + recv_items.len());
-            let mut own = Vec::with_capacity(n_a);
+            let mut own = vec![usize::MAX; n_a];
             let mut recv: Vec<Vec<usize>> = got.iter().map(|_| Vec::new()).collect();
             let mut received: Vec<Vec<(usize, usize)>> = got.iter().map(|b| Vec::with_capacity(b.len())).collect();
             drop(got);
@@ -427,7 +428,7 @@ mod imp {
                     }
                     let e = cols.len() - 1;
                     if from < n_a {
-                        own.push((e, from));
+                        own[from] = e;
                     } else {
                         let q = offset.partition_point(|&o| o <= from) - 1;
                         received[q].push((from - offset[q], e));
@@ -443,8 +444,8 @@ mod imp {
                 recv[q] = list.iter().map(|&(_, e)| e).collect();
             }
             let mut values = vec![0.0; cols.len()];
-            for &(e, k) in &own {
-                values[e] += a.values[k];
+            for (&e, &v) in own.iter().zip(&a.values) {
+                values[e] += v;
             }
             let m = Matrix::from_local_csr(map.n_global(), &row_ptr, &cols, &values).map_err(err)?;
             let dofs = part.dof[..n_own].iter().copied().zip(part.particle[..n_own].iter().copied()).collect();
@@ -577,7 +578,7 @@ mod imp {
     fn sources_len(s: &Sources) -> usize {
         match s {
             Sources::Whole { source, .. } => source.len(),
-            Sources::Part { own, recv, .. } => own.iter().map(|e| e.0 + 1).chain(recv.iter().flatten().map(|e| e + 1)).max().unwrap_or(0),
+            Sources::Part { own, recv, .. } => own.iter().chain(recv.iter().flatten()).map(|e| e + 1).max().unwrap_or(0),
         }
     }
 
@@ -611,8 +612,11 @@ mod imp {
                     let out: Vec<Vec<f64>> = send.iter().map(|ks| ks.iter().map(|&k| a.values[k]).collect()).collect();
                     let got = map.comm().exchange(&out);
                     p.values.iter_mut().for_each(|v| *v = 0.0);
-                    for &(e, k) in own {
-                        p.values[e] += a.values[k];
+                    if own.len() > a.values.len() {
+                        return Err(LinalgError::NotAnalyzed);
+                    }
+                    for (&e, &v) in own.iter().zip(&a.values) {
+                        p.values[e] += v;
                     }
                     for (es, vals) in recv.iter().zip(&got) {
                         for (&e, &v) in es.iter().zip(vals) {
