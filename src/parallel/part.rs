@@ -340,11 +340,7 @@ impl RankPart {
         }
         let (mut model, _) = held.part(&bodies, owned.len())?;
         model.whole = Some(facts);
-        let mut whole = PartMap::default();
-        for (b, &g) in model.bodies.iter().zip(&bodies) {
-            whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
-            whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
-        }
+        let whole = whole_map(&model, &bodies, &layout);
         let whole_eq = whole_equations(&model, &bodies, owned.len(), &layout, &nodes);
         Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole, whole_eq, layout, reach })
     }
@@ -482,11 +478,7 @@ impl RankPart {
             (w.n_nodes, w.n_elements) = (n_nodes, n_elements);
         }
         let bodies: Vec<usize> = part.bodies[..n_own].iter().chain(&ghosts).copied().collect();
-        let mut whole = PartMap::default();
-        for (b, &g) in model.bodies.iter().zip(&bodies) {
-            whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
-            whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
-        }
+        let whole = whole_map(&model, &bodies, layout);
         let whole_eq = whole_equations(&model, &bodies, n_own, layout, &nodes);
         Ok(Self { model, bodies, n_owned_bodies: n_own, nodes, whole, whole_eq, layout: Arc::clone(layout), reach })
     }
@@ -684,6 +676,17 @@ pub(crate) fn read_ghost(at: &mut &[f64]) -> Result<GhostBody, String> {
         .collect::<Result<Vec<_>, String>>()?;
     let mesh = Mesh { nodes, elements, boundary, edge_sets };
     Ok(GhostBody { body: Body { name, mesh, material, node_offset: 0, elem_offset: 0, mesh_size, contact_h }, x0, prescribed })
+}
+
+/// Where the nodes and elements of a part (`model`, whose bodies are the whole model's
+/// `bodies`) are in the whole model laid out by `layout`.
+fn whole_map(model: &Model, bodies: &[usize], layout: &BodyLayout) -> PartMap {
+    let mut whole = PartMap::default();
+    for (b, &g) in model.bodies.iter().zip(bodies) {
+        whole.node.extend(layout.node_offset[g]..layout.node_offset[g] + b.mesh.n_nodes());
+        whole.element.extend(layout.elem_offset[g]..layout.elem_offset[g] + b.mesh.n_elements());
+    }
+    whole
 }
 
 /// The whole model's equation of each dof of a part (`model`, whose bodies are the whole
