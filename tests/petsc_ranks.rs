@@ -287,16 +287,17 @@ fn an_iterative_solve_that_cannot_converge_fails_the_run_cleanly() {
 }
 
 /// Bad input on owned + ghost parts (2 ranks with MUMPS and the barrier: a fresh run on parts
-/// builds no whole model, `case::parts`) is named as the serial run names it: a particle beyond
-/// a wall (found by the process that meshed it, reported by rank 0) and a probe in no particle
-/// (found by no process: rank 0 builds the whole model for the message) stop the run with
-/// the serial run's exit code and message line, no result written and no panic.
+/// builds no whole model, `case::parts`) is named as the serial run names it: a particle
+/// beyond a wall (the second body: found by rank 1, which meshed it, and reported by rank 0)
+/// and a probe in no particle (found by no process: rank 0 builds the whole model for the
+/// message) stop the run with the serial run's exit code and message line, no result written
+/// and no panic.
 #[test]
 fn bad_input_on_parts_is_named_as_in_a_serial_run() {
     let dir = tmpdir("bad_parts");
     let parts = |t: &str| t.replace("method = \"penalty\"", "method = \"barrier\"").replace("linear = \"pcg\"", "linear = \"petsc\"");
     let cases = [
-        ("beyond", "wholly beyond walls[0]", variant(&dir, "beyond", CASE_ELASTIC, |t| parts(t).replace("[contact]", "[[bodies]]\nname = \"stray\"\nmaterial = \"alu\"\nmesh_size = 1.0\nshape = { type = \"disc\", center = [-3.0, 95.0], radius = 2.0 }\n\n[contact]"))),
+        ("beyond", "bodies[1] (\"stray\") lies wholly beyond walls[0]", variant(&dir, "beyond", CASE_ELASTIC, |t| parts(t).replace("[contact]", "[[bodies]]\nname = \"pad\"\nmaterial = \"alu\"\nmesh_size = 2.0\nshape = { type = \"disc\", center = [66.7, 66.7], radius = 3.0 }\n\n[[bodies]]\nname = \"stray\"\nmaterial = \"alu\"\nmesh_size = 1.0\nshape = { type = \"disc\", center = [-3.0, 95.0], radius = 2.0 }\n\n[contact]"))),
         ("probe", "output.probes[0].point", variant(&dir, "probe", CASE_ELASTIC, |t| parts(t).replace("[output]\nevery = 0", "[output]\nevery = 0\nprobes = [{ name = \"gap\", point = [50.0, 33.4] }]"))),
     ];
     for (name, what, case) in cases {
@@ -311,5 +312,29 @@ fn bad_input_on_parts_is_named_as_in_a_serial_run() {
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(!dir.join(format!("{name}_2/history.csv")).exists(), "{name}: a history was written");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A poorly meshed particle on owned + ghost parts is warned of as in the serial run: the
+/// process that meshed it (a fresh run on parts builds no whole model, `case::parts`) sends it
+/// to rank 0, which prints the serial run's warning line (a sliver triangle in a pore of the
+/// 3 × 3 discs, the second body, which rank 1 meshes; one step).
+#[test]
+fn a_poor_mesh_on_parts_is_warned_of_as_in_a_serial_run() {
+    let dir = tmpdir("poor_parts");
+    let case = variant(&dir, "sliver", CASE_ELASTIC, |t| {
+        t.replace("method = \"penalty\"", "method = \"barrier\"").replace("linear = \"pcg\"", "linear = \"petsc\"").replace("end = 3.0", "end = 0.05").replace(
+            "[contact]",
+            "[[bodies]]\nname = \"pad\"\nmaterial = \"alu\"\nmesh_size = 2.0\nshape = { type = \"disc\", center = [66.7, 66.7], radius = 3.0 }\n\n[[bodies]]\nname = \"sliver\"\nmaterial = \"alu\"\nmesh_size = 2.0\nshape = { type = \"polygon\", vertices = [[30.0, 33.0], [37.0, 33.0], [37.0, 33.4]] }\n\n[contact]",
+        )
+    });
+    let line = |o: &Output| String::from_utf8_lossy(&o.stderr).lines().find(|l| l.contains("scaled Jacobian")).map(str::to_string);
+    let serial = run(&case, None, &dir.join("serial"), &[]);
+    let two = run(&case, Some(2), &dir.join("two"), &[]);
+    assert!(serial.status.success() && two.status.success(), "serial: {}\n2 ranks: {}", String::from_utf8_lossy(&serial.stderr), String::from_utf8_lossy(&two.stderr));
+    let warned = line(&serial);
+    assert!(warned.as_deref().is_some_and(|l| l.contains("bodies[1] (\"sliver\")")), "the serial run does not warn of the sliver: {}", String::from_utf8_lossy(&serial.stderr));
+    assert_eq!(line(&two), warned, "the warning on 2 ranks");
+    assert!(String::from_utf8_lossy(&two.stderr).contains("each its own particles and their neighbours"), "the 2-rank run is on parts: {}", String::from_utf8_lossy(&two.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
