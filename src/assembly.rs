@@ -215,7 +215,8 @@ impl Assembler {
     /// changed.
     pub fn set_terms(&mut self, kk: &mut CsrMatrix, blocks: &[Vec<usize>], multipliers: &[Vec<usize>]) -> bool {
         let eq = &self.eq;
-        // (entries the elements couple already are not kept; the list is sorted and
+        // (entries the elements couple already are not kept, so that the same pattern always
+        // has the same list; the list is sorted and
         // de-duplicated whenever it has doubled, so that it never holds many more entries than
         // the distinct ones: a block list repeats most entries many times)
         let in_base = |r: usize, c: usize| r < self.n_free && self.base_cols[self.base_rows[r]..self.base_rows[r + 1]].binary_search(&c).is_ok();
@@ -250,9 +251,6 @@ impl Assembler {
         }
         extra.sort_unstable();
         extra.dedup();
-        // (entries the elements couple already are dropped, so that the same pattern always
-        // has the same list)
-        extra.retain(|&(r, c)| r >= self.n_free || self.base_cols[self.base_rows[r]..self.base_rows[r + 1]].binary_search(&c).is_err());
         if extra == self.extra && multipliers.len() == self.n_multipliers && kk.nrows == self.n_free + multipliers.len() {
             return false;
         }

@@ -363,16 +363,7 @@ impl RankPart {
         }
         let ghosts = ghost_bodies(&crate::distribute::particles_at(whole, x), owner, rank, reach)?;
         let owned: Vec<usize> = (0..owner.len()).filter(|&b| owner[b] == rank).collect();
-        let body_nodes: Vec<usize> = whole.bodies.iter().map(|b| b.mesh.n_nodes()).collect();
-        let numbering = DistributedNumbering::new(owner, &body_nodes, size);
-        let ghost_nodes: Vec<usize> = ghosts.iter().flat_map(|&b| numbering.body_start[b]..numbering.body_start[b] + body_nodes[b]).collect();
-        let n_owned_nodes = numbering.rank_nodes[rank];
-        let nodes = IndexMap::new(comm, n_owned_nodes, ghost_nodes)?;
-        let bodies: Vec<usize> = owned.iter().chain(&ghosts).copied().collect();
-        let (model, map) = whole.part(&bodies, owned.len())?;
-        let layout = Arc::new(BodyLayout::new(whole, owner));
-        let whole_eq = whole_equations(&model, &bodies, owned.len(), &layout, &nodes);
-        Ok(Self { model, bodies, n_owned_bodies: owned.len(), nodes, whole: map, whole_eq, layout, reach })
+        Self::from_held(whole, &owned, &ghosts, Arc::new(BodyLayout::new(whole, owner)), whole.whole_facts(), reach, comm)
     }
 
     /// This part's fields as [`RankPart::regrow`] reads them.
