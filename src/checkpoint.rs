@@ -38,7 +38,7 @@
 use crate::solver::{SolverSpec, TimeSpec};
 use crate::mesh::Mesh;
 use crate::model::Model;
-use crate::solver::{SimScalars, SimState, Simulation, Solution};
+use crate::solver::{SimScalars, SimState, Simulation, Solution, WholeRows};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -321,78 +321,20 @@ impl Checkpoint {
     /// [`CheckpointError::Missing`] when there is no such file, [`CheckpointError::Corrupt`]
     /// when it is not a complete checkpoint of this format version.
     pub fn read(path: &Path) -> Result<Self, CheckpointError> {
-        let path = file_of(path);
-        if !path.is_file() {
-            return Err(CheckpointError::Missing { path });
-        }
-        let corrupt = |reason: String| CheckpointError::Corrupt { path: path.clone(), reason };
-        // the whole file against its seal before HDF5 reads a byte of it
-        let sealed = check_seal(&path).map_err(corrupt)?;
-        let f = crate::h5::open(&path).map_err(|e| corrupt(e.to_string()))?;
-        let ck = Self::read_h5(&f, &path).map_err(corrupt)?;
-        if ck.format_version >= 2 && !sealed {
-            return Err(corrupt("no whole-file checksum at its start (a format 2 checkpoint carries one): the file was changed after it was written".into()));
-        }
-        Ok(ck)
+        CheckpointFile::open(path)?.read()
     }
 
     fn read_h5(f: &hdf5::File, path: &Path) -> Result<Self, String> {
-        use hdf5::types::VarLenUnicode;
-        fn e(what: &str) -> impl Fn(hdf5::Error) -> String + '_ {
-            move |err| format!("{what}: {err}")
-        }
-        let version: u32 = f.attr("format_version").and_then(|a| a.read_scalar()).map_err(e("format_version"))?;
-        if !(OLDEST_VERSION..=FORMAT_VERSION).contains(&version) {
-            return Err(format!("format version {version}; this mpfem reads versions {OLDEST_VERSION} to {FORMAT_VERSION}"));
-        }
-        let verified = version >= 2;
-        if !verified {
-            tracing::warn!(path = %path.display(), version, "an old checkpoint without checksums: its contents cannot be verified");
-        }
-        let string = |name: &str| -> Result<String, String> { f.attr(name).and_then(|a| a.read_scalar::<VarLenUnicode>()).map(|s| s.as_str().to_string()).map_err(e(name)) };
-        let mpfem_version = string("mpfem_version")?;
-        let case_sha256 = string("case_sha256")?;
-        let step: u64 = f.attr("step").and_then(|a| a.read_scalar()).map_err(e("step"))?;
-        let time: f64 = f.attr("time").and_then(|a| a.read_scalar()).map_err(e("time"))?;
-        const CHANGED: &str = "checksum mismatch: the file was changed or damaged after it was written";
-        if verified && string("header_sha256")? != header_digest(version, &mpfem_version, &case_sha256, step, time) {
-            return Err(format!("the root attributes (format_version, mpfem_version, case_sha256, step, time): {CHANGED}"));
-        }
-        // a dataset's values, checked against its checksum (version 2 on)
-        let checked = |name: &str, d: &hdf5::Dataset, actual: String| -> Result<(), String> {
-            if !verified {
-                return Ok(());
-            }
-            let stored = d.attr("sha256").and_then(|a| a.read_scalar::<VarLenUnicode>()).map_err(|err| format!("{name}: no checksum ({err})"))?;
-            if stored.as_str() == actual {
-                Ok(())
-            } else {
-                Err(format!("{name}: {CHANGED}"))
-            }
-        };
-        let bytes = |name: &str| -> Result<Vec<u8>, String> {
-            let d = f.dataset(name).map_err(e(name))?;
-            let v = d.read_raw::<u8>().map_err(e(name))?;
-            checked(name, &d, digest_u8(&v))?;
-            Ok(v)
-        };
+        let head = Header::read(f, path)?;
+        let checked = |name: &str, d: &hdf5::Dataset, actual: String| head.checked(name, d, actual);
         let f64s = |name: &str| -> Result<Vec<f64>, String> {
             let d = f.dataset(name).map_err(e(name))?;
             let v = d.read_raw::<f64>().map_err(e(name))?;
             checked(name, &d, digest_f64(&v))?;
             Ok(v)
         };
-        let u64s = |name: &str| -> Result<Vec<u64>, String> {
-            let d = f.dataset(name).map_err(e(name))?;
-            let v = d.read_raw::<u64>().map_err(e(name))?;
-            checked(name, &d, digest_u64(&v))?;
-            Ok(v)
-        };
-        if !time.is_finite() || time < 0.0 {
-            return Err(format!("time: {time}; expected a finite time ≥ 0"));
-        }
-        let scalars: SimScalars = ciborium::from_reader(bytes("scalars")?.as_slice()).map_err(|err| format!("scalars: {err}"))?;
-        let run = bytes("run")?;
+        let scalars: SimScalars = ciborium::from_reader(head.bytes(f, "scalars")?.as_slice()).map_err(|err| format!("scalars: {err}"))?;
+        let run = head.bytes(f, "run")?;
 
         let u = f64s("solution/u")?;
         let u_prev = f64s("solution/u_prev")?;
@@ -433,53 +375,19 @@ impl Checkpoint {
             None
         };
         let mut meshes = Vec::new();
-        let mg = f.group("meshes").map_err(e("meshes"))?;
-        let mut names = mg.member_names().map_err(e("meshes"))?;
+        let mut names = f.group("meshes").and_then(|g| g.member_names()).map_err(e("meshes"))?;
         names.sort();
         for name in names {
-            let p = format!("meshes/{name}");
-            let nodes = f64s(&format!("{p}/nodes"))?;
-            if nodes.len() % 2 != 0 {
-                return Err(format!("{p}/nodes: odd number of coordinates"));
-            }
-            let mut edge_sets = BTreeMap::new();
-            let sets = f.group(&format!("{p}/edge_sets")).map_err(e(&p))?;
-            for s in sets.member_names().map_err(e(&p))? {
-                edge_sets.insert(s.clone(), pairs::<2>(u64s(&format!("{p}/edge_sets/{s}"))?, &s)?);
-            }
-            let mesh = Mesh {
-                nodes: nodes.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
-                elements: pairs::<4>(u64s(&format!("{p}/elements"))?, &p)?,
-                boundary: pairs::<2>(u64s(&format!("{p}/boundary"))?, &p)?,
-                edge_sets,
-            };
-            // node numbers within the mesh, coordinates finite: nothing later indexes out of it
-            let n = mesh.nodes.len();
-            if let Some(k) = mesh.nodes.iter().position(|q| !q[0].is_finite() || !q[1].is_finite()) {
-                return Err(format!("{p}/nodes: node {k} has coordinates {:?}", mesh.nodes[k]));
-            }
-            let bad = |what: &str, list: &[usize]| list.iter().find(|&&v| v >= n).map(|v| format!("{p}/{what}: node {v} of a mesh of {n} nodes"));
-            if let Some(m) = bad("elements", mesh.elements.as_flattened()) {
-                return Err(m);
-            }
-            if let Some(m) = bad("boundary", mesh.boundary.as_flattened()) {
-                return Err(m);
-            }
-            for (s, edges) in &mesh.edge_sets {
-                if let Some(m) = bad(&format!("edge_sets/{s}"), edges.as_flattened()) {
-                    return Err(m);
-                }
-            }
-            meshes.push(mesh);
+            meshes.push(read_mesh(f, &format!("meshes/{name}"), &checked)?);
         }
         let sol = Solution { time: scalars.time, u, fields, lambda, j0 };
         Ok(Self {
             path: path.to_path_buf(),
-            format_version: version,
-            mpfem_version,
-            case_sha256,
-            step: step as usize,
-            time,
+            format_version: head.version,
+            mpfem_version: head.mpfem_version,
+            case_sha256: head.case_sha256,
+            step: head.step as usize,
+            time: head.time,
             meshes,
             state: SimState { scalars, sol, u_prev, dynamics },
             run,
@@ -538,8 +446,259 @@ impl Checkpoint {
     }
 }
 
+/// A checkpoint opened for reading in pieces: its header, solver scalars and the caller's
+/// record are read, the file's seal checked; the meshes and the arrays are read only where
+/// asked ([`CheckpointFile::mesh`], and by rows through [`WholeRows`]), so that a process of a
+/// run on parts reads its own bodies and rows and never holds the whole state
+/// ([`crate::case::parts`]). [`CheckpointFile::read`] reads all of it (a serial run or a
+/// replicated model).
+pub struct CheckpointFile {
+    pub path: PathBuf,
+    /// The layout's version ([`FORMAT_VERSION`], or an older one still read).
+    pub format_version: u32,
+    pub mpfem_version: String,
+    pub case_sha256: String,
+    pub step: usize,
+    pub time: f64,
+    /// The solver's scalars (counters, contact histories, the barrier's ties: whole-model
+    /// numbering).
+    pub scalars: SimScalars,
+    run: Vec<u8>,
+    /// Each body's group under `meshes/`, in body order.
+    bodies: Vec<String>,
+    file: hdf5::File,
+}
+
+impl std::fmt::Debug for CheckpointFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CheckpointFile").field("path", &self.path).field("step", &self.step).field("time", &self.time).field("bodies", &self.bodies.len()).finish_non_exhaustive()
+    }
+}
+
+/// Values read at once from one array of a checkpoint (8 MB of doubles).
+const ROW_BLOCK_VALUES: usize = 1 << 20;
+
+impl CheckpointFile {
+    /// Open the checkpoint at `path` (a file, or a directory holding `checkpoint.h5`): the
+    /// whole file against its seal, the header, the scalars and the caller's record.
+    ///
+    /// # Errors
+    /// As [`Checkpoint::read`].
+    pub fn open(path: &Path) -> Result<Self, CheckpointError> {
+        let path = file_of(path);
+        if !path.is_file() {
+            return Err(CheckpointError::Missing { path });
+        }
+        let corrupt = |reason: String| CheckpointError::Corrupt { path: path.clone(), reason };
+        let sealed = check_seal(&path).map_err(corrupt)?;
+        let file = crate::h5::open(&path).map_err(|e| corrupt(e.to_string()))?;
+        let head = Header::read(&file, &path).map_err(corrupt)?;
+        if head.version >= 2 && !sealed {
+            return Err(corrupt("no whole-file checksum at its start (a format 2 checkpoint carries one): the file was changed after it was written".into()));
+        }
+        let scalars: SimScalars = ciborium::from_reader(head.bytes(&file, "scalars").map_err(corrupt)?.as_slice()).map_err(|err| corrupt(format!("scalars: {err}")))?;
+        let run = head.bytes(&file, "run").map_err(corrupt)?;
+        let mut bodies = file.group("meshes").and_then(|g| g.member_names()).map_err(|err| corrupt(format!("meshes: {err}")))?;
+        bodies.sort();
+        Ok(Self { path, format_version: head.version, mpfem_version: head.mpfem_version, case_sha256: head.case_sha256, step: head.step as usize, time: head.time, scalars, run, bodies, file })
+    }
+
+    /// All of the checkpoint (each dataset checked against its checksum).
+    ///
+    /// # Errors
+    /// As [`Checkpoint::read`].
+    pub fn read(&self) -> Result<Checkpoint, CheckpointError> {
+        Checkpoint::read_h5(&self.file, &self.path).map_err(|reason| CheckpointError::Corrupt { path: self.path.clone(), reason })
+    }
+
+    /// The caller's record written with the checkpoint ([`write`]'s `run`).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Corrupt`] when it is not a `T`.
+    pub fn run_state<T: DeserializeOwned>(&self) -> Result<T, CheckpointError> {
+        ciborium::from_reader(self.run.as_slice()).map_err(|e| CheckpointError::Corrupt { path: self.path.clone(), reason: format!("run: {e}") })
+    }
+
+    /// How many bodies the checkpoint has meshes of.
+    pub fn n_bodies(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// Body `b`'s mesh at the checkpoint (its node numbers checked against its node count).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Corrupt`] when there is no such body or its mesh cannot be read.
+    pub fn mesh(&self, b: usize) -> Result<Mesh, CheckpointError> {
+        let corrupt = |reason: String| CheckpointError::Corrupt { path: self.path.clone(), reason };
+        let name = self.bodies.get(b).ok_or_else(|| corrupt(format!("body {b}: the checkpoint has meshes of {} bodies", self.bodies.len())))?;
+        // (the bytes were checked against the file's seal; a version 1 file has no checksums)
+        read_mesh(&self.file, &format!("meshes/{name}"), &|_: &str, _: &hdf5::Dataset, _: String| Ok(())).map_err(corrupt)
+    }
+}
+
+impl WholeRows for CheckpointFile {
+    fn values(&self, name: &str) -> Option<usize> {
+        let d = self.file.dataset(name).ok()?;
+        Some(d.shape().iter().product())
+    }
+
+    /// Read in blocks of at most [`ROW_BLOCK_VALUES`] values, each spanning requested rows
+    /// only (what lies between them in a block is read and dropped).
+    fn rows(&self, name: &str, width: usize, rows: &[usize]) -> Result<Vec<f64>, String> {
+        use hdf5::{Hyperslab, SliceOrIndex};
+        let e = |err: hdf5::Error| format!("{name}: {err}");
+        let d = self.file.dataset(name).map_err(e)?;
+        let shape = d.shape();
+        let total: usize = shape.iter().product();
+        let inner: usize = shape.iter().skip(1).product();
+        if width == 0 {
+            return Ok(Vec::new());
+        }
+        if shape.is_empty() || inner == 0 || width % inner != 0 || total % width != 0 {
+            return Err(format!("{name}: an array of shape {shape:?} is not read by rows of {width} values"));
+        }
+        let (n, k) = (total / width, width / inner);
+        if let Some(&r) = rows.iter().find(|&&r| r >= n) {
+            return Err(format!("{name}: row {r} of {n} rows"));
+        }
+        let mut order: Vec<usize> = (0..rows.len()).collect();
+        order.sort_by_key(|&i| rows[i]);
+        let per_block = (ROW_BLOCK_VALUES / width).max(1);
+        let mut out = vec![0.0; width * rows.len()];
+        let mut at = 0;
+        while at < order.len() {
+            let lo = rows[order[at]];
+            let mut end = at;
+            while end < order.len() && rows[order[end]] < lo + per_block {
+                end += 1;
+            }
+            let hi = rows[order[end - 1]] + 1;
+            let mut slab = vec![SliceOrIndex::from(lo * k..hi * k)];
+            slab.extend((1..shape.len()).map(|_| SliceOrIndex::from(..)));
+            let block: Vec<f64> = d.read_slice::<f64, _, ndarray::IxDyn>(Hyperslab::from(slab)).map_err(e)?.iter().copied().collect();
+            for &i in &order[at..end] {
+                let r = rows[i] - lo;
+                out[width * i..width * (i + 1)].copy_from_slice(&block[width * r..width * (r + 1)]);
+            }
+            at = end;
+        }
+        Ok(out)
+    }
+}
+
+/// The root attributes of a checkpoint, checked against their checksum (version 2 on).
+struct Header {
+    version: u32,
+    mpfem_version: String,
+    case_sha256: String,
+    step: u64,
+    time: f64,
+}
+
+const CHANGED: &str = "checksum mismatch: the file was changed or damaged after it was written";
+
+impl Header {
+    fn read(f: &hdf5::File, path: &Path) -> Result<Self, String> {
+        use hdf5::types::VarLenUnicode;
+        let version: u32 = f.attr("format_version").and_then(|a| a.read_scalar()).map_err(e("format_version"))?;
+        if !(OLDEST_VERSION..=FORMAT_VERSION).contains(&version) {
+            return Err(format!("format version {version}; this mpfem reads versions {OLDEST_VERSION} to {FORMAT_VERSION}"));
+        }
+        if version < 2 {
+            tracing::warn!(path = %path.display(), version, "an old checkpoint without checksums: its contents cannot be verified");
+        }
+        let string = |name: &str| -> Result<String, String> { f.attr(name).and_then(|a| a.read_scalar::<VarLenUnicode>()).map(|s| s.as_str().to_string()).map_err(e(name)) };
+        let mpfem_version = string("mpfem_version")?;
+        let case_sha256 = string("case_sha256")?;
+        let step: u64 = f.attr("step").and_then(|a| a.read_scalar()).map_err(e("step"))?;
+        let time: f64 = f.attr("time").and_then(|a| a.read_scalar()).map_err(e("time"))?;
+        if version >= 2 && string("header_sha256")? != header_digest(version, &mpfem_version, &case_sha256, step, time) {
+            return Err(format!("the root attributes (format_version, mpfem_version, case_sha256, step, time): {CHANGED}"));
+        }
+        if !time.is_finite() || time < 0.0 {
+            return Err(format!("time: {time}; expected a finite time ≥ 0"));
+        }
+        Ok(Self { version, mpfem_version, case_sha256, step, time })
+    }
+
+    /// A dataset's values checked against its checksum (version 2 on).
+    fn checked(&self, name: &str, d: &hdf5::Dataset, actual: String) -> Result<(), String> {
+        use hdf5::types::VarLenUnicode;
+        if self.version < 2 {
+            return Ok(());
+        }
+        let stored = d.attr("sha256").and_then(|a| a.read_scalar::<VarLenUnicode>()).map_err(|err| format!("{name}: no checksum ({err})"))?;
+        if stored.as_str() == actual {
+            Ok(())
+        } else {
+            Err(format!("{name}: {CHANGED}"))
+        }
+    }
+
+    fn bytes(&self, f: &hdf5::File, name: &str) -> Result<Vec<u8>, String> {
+        let d = f.dataset(name).map_err(e(name))?;
+        let v = d.read_raw::<u8>().map_err(e(name))?;
+        self.checked(name, &d, digest_u8(&v))?;
+        Ok(v)
+    }
+}
+
+fn e(what: &str) -> impl Fn(hdf5::Error) -> String + '_ {
+    move |err| format!("{what}: {err}")
+}
+
+/// The mesh of group `p` (`meshes/NNNNNN`), each dataset passed to `checked` with its
+/// values' checksum; its node numbers checked against its node count and its coordinates
+/// finite (nothing later indexes out of it).
+fn read_mesh(f: &hdf5::File, p: &str, checked: &dyn Fn(&str, &hdf5::Dataset, String) -> Result<(), String>) -> Result<Mesh, String> {
+    let f64s = |name: &str| -> Result<Vec<f64>, String> {
+        let d = f.dataset(name).map_err(e(name))?;
+        let v = d.read_raw::<f64>().map_err(e(name))?;
+        checked(name, &d, digest_f64(&v))?;
+        Ok(v)
+    };
+    let u64s = |name: &str| -> Result<Vec<u64>, String> {
+        let d = f.dataset(name).map_err(e(name))?;
+        let v = d.read_raw::<u64>().map_err(e(name))?;
+        checked(name, &d, digest_u64(&v))?;
+        Ok(v)
+    };
+    let nodes = f64s(&format!("{p}/nodes"))?;
+    if nodes.len() % 2 != 0 {
+        return Err(format!("{p}/nodes: odd number of coordinates"));
+    }
+    let mut edge_sets = BTreeMap::new();
+    let sets = f.group(&format!("{p}/edge_sets")).map_err(e(p))?;
+    for s in sets.member_names().map_err(e(p))? {
+        edge_sets.insert(s.clone(), pairs::<2>(u64s(&format!("{p}/edge_sets/{s}"))?, &s)?);
+    }
+    let mesh = Mesh {
+        nodes: nodes.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+        elements: pairs::<4>(u64s(&format!("{p}/elements"))?, p)?,
+        boundary: pairs::<2>(u64s(&format!("{p}/boundary"))?, p)?,
+        edge_sets,
+    };
+    let n = mesh.nodes.len();
+    if let Some(k) = mesh.nodes.iter().position(|q| !q[0].is_finite() || !q[1].is_finite()) {
+        return Err(format!("{p}/nodes: node {k} has coordinates {:?}", mesh.nodes[k]));
+    }
+    let bad = |what: &str, list: &[usize]| list.iter().find(|&&v| v >= n).map(|v| format!("{p}/{what}: node {v} of a mesh of {n} nodes"));
+    if let Some(m) = bad("elements", mesh.elements.as_flattened()) {
+        return Err(m);
+    }
+    if let Some(m) = bad("boundary", mesh.boundary.as_flattened()) {
+        return Err(m);
+    }
+    for (s, edges) in &mesh.edge_sets {
+        if let Some(m) = bad(&format!("edge_sets/{s}"), edges.as_flattened()) {
+            return Err(m);
+        }
+    }
+    Ok(mesh)
+}
+
 /// Whether two meshes are the same, bit for bit.
-fn same_mesh(a: &Mesh, b: &Mesh) -> bool {
+pub fn same_mesh(a: &Mesh, b: &Mesh) -> bool {
     a.nodes.len() == b.nodes.len()
         && a.nodes.iter().zip(&b.nodes).all(|(p, q)| p[0].to_bits() == q[0].to_bits() && p[1].to_bits() == q[1].to_bits())
         && a.elements == b.elements

@@ -17,10 +17,9 @@
 //! ```
 
 use crate::case::Case;
-use crate::checkpoint::Checkpoint;
+use crate::checkpoint::CheckpointFile;
 use crate::fits::CurvePoint;
 use crate::model::Model;
-use crate::parallel::part::RankPart;
 use crate::output::{write_summary, FinalState, HistoryWriter, Phases, ProbeWriter, SummaryFile};
 use crate::comm::Collective;
 use crate::plot::{PlotReport, PlotRequest};
@@ -498,7 +497,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     // the checkpoint to continue from, read before anything is written
     let checkpoint = match &opts.restart {
         None => None,
-        Some(p) => match Checkpoint::read(p) {
+        Some(p) => match CheckpointFile::open(p) {
             Ok(ck) => Some(ck),
             Err(e) => return Ok(bad_input(root, reporter, format!("cannot restart: {e}"))),
         },
@@ -586,7 +585,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
     // the meshes are gathered at the output steps. `part_reach`: the ghosts' reach of the
     // parts, kept to grow them again)
     let (mut sim, resumed, mut whole, part_reach) = match checkpoint {
-        None if parts => match fresh_part(&c, &comm) {
+        None if parts => match part_start(&c, &comm, None) {
             Ok(FreshPart { sim, held, reach, poor }) => {
                 for w in size_and_mesh_warnings(sim.model.whole_facts().n_elements, poor.into_iter()) {
                     reporter.note(Note::Warning, &format!("{label}: {w}"));
@@ -611,10 +610,6 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             (Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?, None, None, None)
         }
         Some(ck) => {
-            let model = match whole_model() {
-                Ok(m) => m,
-                Err(e) => return Ok(bad_input(true, reporter, e)),
-            };
             let (step, time, path) = (ck.step, ck.time, ck.path.clone());
             let state: RunState = match ck.run_state() {
                 Ok(s) => s,
@@ -624,17 +619,22 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
                 _ => PathBuf::from("."),
             };
-            let restored = if parts {
-                ck.model(model).map_err(|e| e.to_string()).and_then(|whole| {
-                    let reach = RankPart::reach(&whole);
-                    part_simulation(&whole, &c, &comm, Some(ck.state), reach).map(|sim| (sim, Some(whole), Some(reach)))
-                })
+            // (on parts each process reads its own of the checkpoint; otherwise all of it, onto
+            // the whole model)
+            let (sim, whole, reach) = if parts {
+                match part_start(&c, &comm, Some(&ck)) {
+                    Ok(FreshPart { sim, held, reach, .. }) => (sim, held, Some(reach)),
+                    Err(e) => return Ok(bad_input(true, reporter, e)),
+                }
             } else {
-                ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)).map(|sim| (sim, None, None)).map_err(|e| e.to_string())
-            };
-            let (sim, whole, reach) = match restored {
-                Ok(s) => s,
-                Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
+                let model = match whole_model() {
+                    Ok(m) => m,
+                    Err(e) => return Ok(bad_input(true, reporter, e)),
+                };
+                match ck.read().and_then(|ck| ck.restore_with(model, c.time, c.solver, Arc::clone(&comm))) {
+                    Ok(sim) => (sim, None, None),
+                    Err(e) => return Ok(bad_input(true, reporter, format!("cannot restart: {e}"))),
+                }
             };
             copy_run_files(&from, out)?;
             reporter.note(Note::Info, &format!("restarting from {} at step {step}, t = {} s", path.display(), seconds(time)));
@@ -1024,14 +1024,14 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
 /// Ranks 1..N of an MPI run: the same solve on the same model (from the same checkpoint on a
 /// restart), no output (rank 0 writes the results and reports); the stop after the stop flag
 /// is rank 0's decision, broadcast after every step.
-fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+fn run_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<CheckpointFile>) -> Result<RunOutcome, RunError> {
     let model = match Model::from_case(c) {
         Ok(m) => m,
         Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
     };
     let mut sim = match checkpoint {
         None => Simulation::new_with(model, c.time, c.solver, Arc::clone(&comm))?,
-        Some(ck) => match ck.restore_with(model, c.time, c.solver, Arc::clone(&comm)) {
+        Some(ck) => match ck.read().and_then(|ck| ck.restore_with(model, c.time, c.solver, Arc::clone(&comm))) {
             Ok(s) => s,
             Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
         },
@@ -1118,28 +1118,7 @@ fn assemble_whole(frame: &Option<crate::model::ModelFrame>, gathered: Option<&mu
     f.assemble(std::mem::take(&mut g.bodies)).map(Some).map_err(|e| format!("the whole model for the output: {e}"))
 }
 
-/// This process's part of `whole` as a simulation of case `c` ([`Simulation::new_part`]): from
-/// the start, or at the whole model's `state` (a checkpoint's, read on every process), with the
-/// ghosts where the particles are in it. Collective.
-fn part_simulation(whole: &Model, c: &Case, comm: &Arc<dyn Collective>, state: Option<SimState>, reach: f64) -> Result<Simulation, String> {
-    let x: Vec<[f64; 2]> = match &state {
-        Some(s) if s.sol.u.len() != whole.n_dofs() => return Err(format!("the checkpoint has {} displacement dofs, the model {}", s.sol.u.len(), whole.n_dofs())),
-        Some(s) => whole.x0.iter().enumerate().map(|(n, p)| [p[0] + s.sol.u[2 * n], p[1] + s.sol.u[2 * n + 1]]).collect(),
-        None => whole.x0.clone(),
-    };
-    let part = crate::parallel::part::RankPart::for_run(whole, &x, reach, Arc::clone(comm)).map_err(|e| e.to_string())?;
-    let mut sim = match state.is_some() {
-        true => Simulation::new_part_for_state(part, c.time.clone(), c.solver.clone()),
-        false => Simulation::new_part(part, c.time.clone(), c.solver.clone()),
-    }
-    .map_err(|e| e.to_string())?;
-    if let Some(s) = state {
-        sim.set_whole_state(s)?;
-    }
-    Ok(sim)
-}
-
-/// What [`fresh_part`] makes.
+/// What [`part_start`] makes.
 struct FreshPart {
     sim: Simulation,
     /// (rank 0) the model of the bodies it holds ([`crate::case::parts::PartStart::held`])
@@ -1150,15 +1129,17 @@ struct FreshPart {
     poor: Vec<(usize, String, f64)>,
 }
 
-/// This process's simulation of a fresh run on parts, made without the whole model
-/// ([`crate::case::parts::start_part`]); on rank 0 also the model of the bodies it holds (for
-/// the output's columns and frame), and on every process the ghosts' reach and (rank 0) the
-/// poorly meshed bodies. Collective. A case that does not make a model is named by the whole
-/// model's own message on rank 0 ([`Model::from_case`], built then for that alone).
-fn fresh_part(c: &Case, comm: &Arc<dyn Collective>) -> Result<FreshPart, String> {
-    use crate::case::parts::{start_part, StartError};
+/// This process's simulation of a run on parts, made without the whole model
+/// ([`crate::case::parts::start_part_from`]): fresh, or at the checkpoint `from` (of which
+/// each process reads its share's meshes and its part's rows); on rank 0 also the model of
+/// the bodies it holds (for the output's columns and frame), and on every process the ghosts'
+/// reach and (rank 0, a fresh run) the poorly meshed bodies. Collective. A case that does not
+/// make a model is named by the whole model's own message on rank 0 ([`Model::from_case`],
+/// built then for that alone); a checkpoint that does not fit, by "cannot restart: …".
+fn part_start(c: &Case, comm: &Arc<dyn Collective>, from: Option<&CheckpointFile>) -> Result<FreshPart, String> {
+    use crate::case::parts::{start_part_from, StartError};
     let t = Instant::now();
-    match start_part(c, Arc::clone(comm), POOR_SCALED_JACOBIAN) {
+    match start_part_from(c, Arc::clone(comm), POOR_SCALED_JACOBIAN, from) {
         Ok(s) => {
             let reach = s.part.reach;
             tracing::info!(
@@ -1167,12 +1148,27 @@ fn fresh_part(c: &Case, comm: &Arc<dyn Collective>) -> Result<FreshPart, String>
                 ghost_bodies = s.part.bodies.len() - s.part.n_owned_bodies,
                 nodes = s.part.model.n_nodes(),
                 peak_memory_mb = own_peak_memory(),
+                restart = from.is_some(),
                 "this process's part is made from the case (no process built the whole model)"
             );
-            let sim = Simulation::new_part(s.part, c.time, c.solver).map_err(|e| e.to_string())?;
+            let sim = match from {
+                None => Simulation::new_part(s.part, c.time, c.solver).map_err(|e| e.to_string())?,
+                Some(ck) => {
+                    let mut sim = Simulation::new_part_for_state(s.part, c.time, c.solver).map_err(|e| e.to_string())?;
+                    // (collective: every process learns whether one could not take its state)
+                    let set = sim.set_whole_state_from(ck.scalars.clone(), ck).map_err(|e| format!("cannot restart: {}: {e}", ck.path.display()));
+                    let failed = comm.max(if set.is_err() { 1.0 } else { 0.0 }) > 0.0;
+                    match (set, failed) {
+                        (Err(e), _) => return Err(e),
+                        (Ok(()), true) => return Err("cannot restart: another process could not take its part of the checkpoint's state".into()),
+                        (Ok(()), false) => sim,
+                    }
+                }
+            };
             Ok(FreshPart { sim, held: s.held, reach, poor: s.poor })
         }
         Err(StartError::Model(seen)) if comm.is_root() => Err(Model::from_case(c).err().map(|e| e.to_string()).or(seen).unwrap_or_else(|| "a process could not build its part of the model".into())),
+        Err(e @ StartError::Restart(_)) => Err(format!("cannot restart: {e}")),
         Err(e) => Err(e.to_string()),
     }
 }
@@ -1180,25 +1176,14 @@ fn fresh_part(c: &Case, comm: &Arc<dyn Collective>) -> Result<FreshPart, String>
 /// Ranks 1..N of a run on parts ([`run`] on rank 0): the same part of the same model, the same
 /// collective steps of the output after every step (the flags of rank 0, the gathers), no
 /// output of their own. Returns what the run did; rank 0 says why a setup failed.
-fn run_part_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpoint>) -> Result<RunOutcome, RunError> {
+fn run_part_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<CheckpointFile>) -> Result<RunOutcome, RunError> {
     let (every, probes) = (c.output.every, !c.output.probes.is_empty());
-    // (a restart: the whole model, and the checkpoint's whole state, only until this
-    // process's part is made)
+    // (a restart: this process's share and part of the checkpoint, as on rank 0)
     let (sim, reach) = match checkpoint {
-        None => match fresh_part(c, &comm) {
+        Some(ck) if ck.run_state::<RunState>().is_err() => return Ok(RunOutcome::BadInput("cannot restart: the checkpoint's run record".into())),
+        ck => match part_start(c, &comm, ck.as_ref()) {
             Ok(FreshPart { sim, reach, .. }) => (Ok(sim), reach),
             Err(e) => (Err(e), 0.0),
-        },
-        Some(ck) => match (ck.run_state::<RunState>(), Model::from_case(c)) {
-            (Err(e), _) => (Err(e.to_string()), 0.0),
-            (_, Err(e)) => return Ok(RunOutcome::BadInput(e.to_string())),
-            (Ok(_), Ok(whole)) => match ck.model(whole) {
-                Ok(w) => {
-                    let reach = RankPart::reach(&w);
-                    (part_simulation(&w, c, &comm, Some(ck.state), reach), reach)
-                }
-                Err(e) => return Ok(RunOutcome::BadInput(e.to_string())),
-            },
         },
     };
     let mut sim = match sim {

@@ -360,7 +360,96 @@ displacements = ["g0_p20.boundary"]
     let probes = comm.all_gather_varcount(&[start.part.model.probes.len() as f64, start.part.model.loading.loads[0].edges.len() as f64]);
     let (n_probes, n_edges): (f64, f64) = probes.chunks_exact(2).fold((0.0, 0.0), |a, c| (a.0 + c[0], a.1 + c[1]));
     assert_eq!((n_probes as usize, n_edges as usize), (2, whole.loading.loads[0].edges.len()), "each probe and load edge on one process");
-    format!("from the case: {} owned + {} ghost bodies, identical", start.part.n_owned_bodies, start.part.bodies.len() - start.part.n_owned_bodies)
+    let restart = part_from_a_checkpoint(comm, &case, &text);
+    format!("from the case: {} owned + {} ghost bodies, identical; {restart}", start.part.n_owned_bodies, start.part.bodies.len() - start.part.n_owned_bodies)
+}
+
+/// The part and state a restart on parts starts with, made from a checkpoint without the
+/// whole model or the whole state (`start_part_from` and `set_whole_state_from`: each process
+/// reads its share's meshes and its part's rows of the file), against the part
+/// `RankPart::for_run` makes of the checkpoint's whole model (`Checkpoint::model`) at the
+/// checkpoint's coordinates and the state `set_whole_state` takes from the whole state read
+/// into memory: the same, exactly. The checkpoint has one disc re-meshed (finer: other node and
+/// element counts than the case's), the bottom and top rows of discs swapped (each turned half
+/// a turn about the die's centre, so that the ghosts at the checkpoint are not the reference
+/// ones), every element field set to values of its own.
+fn part_from_a_checkpoint(comm: &Arc<dyn Collective>, case: &mpfem::case::Case, text: &str) -> String {
+    use mpfem::checkpoint::{Checkpoint, CheckpointFile};
+    use mpfem::solver::Simulation;
+    let rank = comm.rank();
+    // the checkpoint: disc 0 re-meshed at 3 mm (the case meshes it at 4), written by rank 0
+    let finer = mpfem::case::parse(&text.replace("mesh_size = 4", "mesh_size = 3"), std::path::Path::new(".")).expect("the finer case");
+    let finer = Model::from_case(&finer).expect("the finer model").bodies[0].mesh.clone();
+    let whole = Model::from_case(case).expect("model").with_body_mesh(0, finer).expect("disc 0 re-meshed");
+    let serial: Arc<dyn Collective> = Arc::new(mpfem::comm::Serial);
+    let mut state = Simulation::new_with(whole.clone(), case.time.clone(), case.solver.clone(), serial).expect("the whole simulation").state();
+    for (b, body) in whole.bodies.iter().enumerate() {
+        // (the bottom and top rows turned half a turn about the die's centre: each of their
+        // discs in the other row's place; every disc shifted by up to 0.2 mm of its own)
+        let turned = if b < 6 || b >= 30 { 1.0 } else { 0.0 };
+        let shift = [0.2 * noise(b + 100), 0.2 * noise(b + 200)];
+        for n in body.node_offset..body.node_offset + body.mesh.n_nodes() {
+            let [x, y] = whole.x0[n];
+            state.sol.u[2 * n] = turned * (120.0 - 2.0 * x) + shift[0];
+            state.sol.u[2 * n + 1] = turned * (120.0 - 2.0 * y) + shift[1];
+            state.u_prev[2 * n] = 0.5 * state.sol.u[2 * n];
+            state.u_prev[2 * n + 1] = 0.5 * state.sol.u[2 * n + 1];
+        }
+    }
+    let f = &mut state.sol.fields;
+    for e in 0..whole.elements.len() {
+        let v = |k: usize| noise(31 * e + k);
+        for gp in 0..4 {
+            f.states[e][gp] = MatState { cp_inv: [1.0 + 0.01 * v(gp), 0.01 * v(gp + 4), 0.01 * v(gp + 8), 1.0 + 0.01 * v(gp + 12)], eps_p: 0.1 * v(gp + 16).abs(), eps_c: 0.0 };
+            f.sig[e][gp] = [v(gp + 20), v(gp + 24), v(gp + 28), v(gp + 32)];
+        }
+        f.pressure[e] = v(40);
+        f.theta[e] = 1.0 + 0.01 * v(41);
+        f.alpha[e] = std::array::from_fn(|k| 0.001 * v(42 + k));
+        state.sol.lambda[e] = v(50);
+        state.sol.j0[e] = 1.0 + 0.01 * v(51);
+    }
+    let mut id = [f64::from(std::process::id())];
+    comm.broadcast(&mut id);
+    let dir = std::env::temp_dir().join(format!("mpfem-ghosts-checkpoint-{}", id[0]));
+    if rank == 0 {
+        std::fs::create_dir_all(&dir).expect("a folder");
+        mpfem::checkpoint::write_state(&dir, &whole, &state, "sha", &0u32).expect("the checkpoint written");
+    }
+    comm.max(0.0);
+    // the reference: the checkpoint read whole, its model, the part at its coordinates
+    let read = Checkpoint::read(&dir).expect("the checkpoint read whole");
+    let ck_model = read.model(Model::from_case(case).expect("model")).expect("the checkpoint's model");
+    assert_eq!(ck_model.bodies[0].mesh.n_nodes(), whole.bodies[0].mesh.n_nodes(), "disc 0 has its re-meshed mesh");
+    let x: Vec<[f64; 2]> = ck_model.x0.iter().enumerate().map(|(n, p)| [p[0] + read.state.sol.u[2 * n], p[1] + read.state.sol.u[2 * n + 1]]).collect();
+    let reach = RankPart::reach(&ck_model);
+    let reference = RankPart::for_run(&ck_model, &x, reach, comm.clone()).expect("the part of the checkpoint's model");
+    let moved = mpfem::parallel::part::ghost_bodies(&mpfem::distribute::particles(&ck_model), &reference.layout.owner, rank, reach).expect("reference ghosts") != reference.bodies[reference.n_owned_bodies..];
+    let moved = comm.max(if moved { 1.0 } else { 0.0 }) > 0.0;
+    assert!(moved, "the discs moved far enough that some process's ghosts at the checkpoint are not those of the reference configuration");
+    // made from the checkpoint's file in pieces
+    let file = CheckpointFile::open(&dir).expect("the checkpoint opened");
+    let start = mpfem::case::parts::start_part_from(case, comm.clone(), 0.1, Some(&file)).expect("the part made from the checkpoint");
+    same_part(&start.part, &reference, "made from the checkpoint");
+    assert_eq!(start.part.reach, reach, "rank {rank}: the reach at the checkpoint");
+    let (own, ghosts) = (start.part.n_owned_bodies, start.part.bodies.len() - start.part.n_owned_bodies);
+    let mut a = Simulation::new_part_for_state(start.part, case.time.clone(), case.solver.clone()).expect("the part's simulation");
+    a.set_whole_state_from(file.scalars.clone(), &file).expect("the state from the file's rows");
+    let mut b = Simulation::new_part_for_state(reference, case.time.clone(), case.solver.clone()).expect("the reference simulation");
+    b.set_whole_state(read.state).expect("the state from the whole state");
+    let (sa, sb) = (a.state(), b.state());
+    assert_eq!(sa.sol.u, sb.sol.u, "rank {rank}: the displacements");
+    assert_eq!(sa.u_prev, sb.u_prev, "rank {rank}: the previous displacements");
+    assert_eq!((&sa.sol.lambda, &sa.sol.j0), (&sb.sol.lambda, &sb.sol.j0), "rank {rank}: the element multipliers and j0");
+    let (fa, fb) = (&sa.sol.fields, &sb.sol.fields);
+    assert_eq!(format!("{:?}", (&fa.states, &fa.sig, &fa.pressure, &fa.theta, &fa.alpha)), format!("{:?}", (&fb.states, &fb.sig, &fb.pressure, &fb.theta, &fb.alpha)), "rank {rank}: the element fields");
+    assert_eq!(format!("{:?}", sa.scalars), format!("{:?}", sb.scalars), "rank {rank}: the scalars");
+    assert!(sa.sol.u.iter().any(|&v| v != 0.0) && fa.pressure.iter().any(|&v| v != 0.0), "rank {rank}: the state read is not empty");
+    comm.max(0.0);
+    if rank == 0 {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    format!("from a checkpoint: {own} owned + {ghosts} ghost bodies, part and state identical")
 }
 
 /// That `a` (a part grown again) is `b` (the part made from the whole model), exactly.

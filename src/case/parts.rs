@@ -19,6 +19,8 @@
 //! process builds is its part plus a share of the bodies, never the whole mesh.
 
 use super::{Case, ProbeSpecAt};
+use crate::checkpoint::CheckpointFile;
+use crate::solver::WholeRows;
 use crate::comm::Collective;
 use crate::model::{Model, WholeModel};
 use crate::parallel::part::{BodyLayout, PartError, RankPart};
@@ -49,6 +51,10 @@ pub enum StartError {
     /// rank 0 ([`Model::outside_walls`]).
     #[error("{}", .0.as_deref().unwrap_or("a particle lies beyond a wall (rank 0 names it)"))]
     Outside(Option<String>),
+    /// The checkpoint a restart reads does not fit the case, or cannot be read (its message;
+    /// on rank 0 the first process's that saw one).
+    #[error("{}", .0.as_deref().unwrap_or("the checkpoint does not fit the case (on another process)"))]
+    Restart(Option<String>),
     #[error(transparent)]
     Part(#[from] PartError),
 }
@@ -68,17 +74,29 @@ const FACTS: usize = 12;
 /// ([`StartError::Model`]), a particle beyond a wall, a process without a body, or what
 /// [`RankPart::from_held`] refuses.
 pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Result<PartStart, StartError> {
+    start_part_from(case, comm, poor_below, None)
+}
+
+/// [`start_part`], or with `from` the start of a restart on parts from that checkpoint: the
+/// bodies' meshes are the checkpoint's (re-meshing may have replaced some), the ghosts are
+/// chosen where the particles are at the checkpoint, and each process reads of the checkpoint
+/// only its share's and its part's meshes and rows (the state itself is set by
+/// [`crate::solver::Simulation::set_whole_state_from`]). The partition is made on the
+/// reference boxes, as on the whole model ([`RankPart::for_run`]); particles beyond a wall and
+/// poor meshes are not looked for again. Collective.
+///
+/// # Errors
+/// As [`start_part`]; [`StartError::Restart`] for a checkpoint that does not fit the case
+/// (another number of bodies or nodes, a re-meshed body that is constrained) or cannot be read.
+pub fn start_part_from(case: &Case, comm: Arc<dyn Collective>, poor_below: f64, from: Option<&CheckpointFile>) -> Result<PartStart, StartError> {
     let (rank, size) = (comm.rank(), comm.size());
     let nb = case.bodies.len();
+    if let Some(ck) = from.filter(|ck| ck.n_bodies() != nb) {
+        return Err(StartError::Restart(Some(mismatch(ck, format!("{} bodies in the checkpoint, {nb} in the case", ck.n_bodies())))));
+    }
     // 1. this process's share of the bodies, and what every process needs of each
     let share: Vec<bool> = (0..nb).map(|b| b % size == rank).collect();
-    let shared = Model::from_case_holding(case, Some(&share), &[]);
-    let failed = comm.max(if shared.is_err() { 1.0 } else { 0.0 }) > 0.0;
-    let mut shared = match (shared, failed) {
-        (Ok(m), false) => m,
-        (Err(e), _) => return Err(StartError::Model(Some(e.to_string()))),
-        (Ok(_), true) => return Err(StartError::Model(None)),
-    };
+    let mut shared = agreed(&*comm, held_model(case, &share, &[], from))?;
     let boxes = crate::distribute::particles(&shared);
     let mut mine = Vec::with_capacity(FACTS * nb.div_ceil(size));
     for (b, body) in shared.bodies.iter().enumerate().filter(|&(b, _)| share[b]) {
@@ -113,6 +131,21 @@ pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Re
     if seen.iter().any(|s| !s) {
         return Err(StartError::Model(Some(format!("{} of {nb} bodies were not gathered", seen.iter().filter(|s| !**s).count()))));
     }
+    // (a restart: the ghosts are chosen where the particles are at the checkpoint)
+    let now = match from {
+        Some(ck) => Some(agreed(&*comm, boxes_at(ck, &shared, &share, &sizes, facts.n_nodes))?),
+        None => None,
+    };
+    let now = match now {
+        Some(own) => {
+            let (now, known) = crate::parallel::part::all_boxes(&*comm, own.into_iter(), nb);
+            if known.iter().any(|k| !k) {
+                return Err(StartError::Restart(Some(format!("{} of {nb} bodies' places at the checkpoint were not gathered", known.iter().filter(|k| !**k).count()))));
+            }
+            Some(now)
+        }
+        None => None,
+    };
     // where the point probes are: the first body holding the point, as the whole model finds it
     let mut found = Vec::new();
     for (i, p) in case.output.probes.iter().enumerate() {
@@ -135,18 +168,21 @@ pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Re
     if case.output.probes.iter().enumerate().any(|(i, p)| matches!(p.at, ProbeSpecAt::Point { .. }) && !pins.iter().any(|q| q.0 == i)) {
         return Err(StartError::Model(None));
     }
-    // particles beyond a wall, and poor meshes: to rank 0, in body order
+    // particles beyond a wall, and poor meshes: to rank 0, in body order (a fresh run's)
     shared.whole = Some(facts);
-    let outside: Vec<(usize, String)> = shared.outside_walls_by_body();
-    let n_outside = comm.max(outside.len() as f64);
-    let outside = texts_to_root(&*comm, &outside);
-    let poor: Vec<f64> = shared.poor_meshes(poor_below).into_iter().flat_map(|(b, q)| [b as f64, q]).collect();
-    let mut poor: Vec<(usize, String, f64)> = comm.gather_varcount_to_root(&poor).chunks_exact(2).map(|c| (c[0] as usize, case.bodies[c[0] as usize].name.clone(), c[1])).collect();
-    poor.sort_by_key(|p| p.0);
-    drop(shared);
-    if n_outside > 0.0 {
-        return Err(StartError::Outside(outside.into_iter().next().map(|(_, m)| m)));
+    let mut poor = Vec::new();
+    if from.is_none() {
+        let outside: Vec<(usize, String)> = shared.outside_walls_by_body();
+        let n_outside = comm.max(outside.len() as f64);
+        let outside = texts_to_root(&*comm, &outside);
+        let mine: Vec<f64> = shared.poor_meshes(poor_below).into_iter().flat_map(|(b, q)| [b as f64, q]).collect();
+        poor = comm.gather_varcount_to_root(&mine).chunks_exact(2).map(|c| (c[0] as usize, case.bodies[c[0] as usize].name.clone(), c[1])).collect();
+        poor.sort_by_key(|p| p.0);
+        if n_outside > 0.0 {
+            return Err(StartError::Outside(outside.into_iter().next().map(|(_, m)| m)));
+        }
     }
+    drop(shared);
     // 2. the owners (rank 0's partition) and the close pairs they split
     let mut owner = vec![0.0; nb + 1];
     if comm.is_root() {
@@ -166,32 +202,108 @@ pub fn start_part(case: &Case, comm: Arc<dyn Collective>, poor_below: f64) -> Re
     let layout = Arc::new(BodyLayout { edge_cut, ..BodyLayout::from_sizes(owner.clone(), sizes, &fixed) });
     // 3. this process's bodies, its ghosts and the named ones, meshed; its part of them
     let reach = RankPart::reach_of(&boxes, facts.h_min);
-    let ghosts = crate::parallel::part::ghost_bodies(&boxes, &owner, rank, reach).map_err(PartError::from)?;
+    let ghosts = crate::parallel::part::ghost_bodies(now.as_ref().unwrap_or(&boxes), &owner, rank, reach).map_err(PartError::from)?;
     drop(boxes);
+    drop(now);
     let owned: Vec<usize> = (0..nb).filter(|&b| owner[b] == rank).collect();
     let named = named_bodies(case, &pins);
     let mut held = vec![false; nb];
     for &b in owned.iter().chain(&ghosts).chain(&named) {
         held[b] = true;
     }
-    let model = Model::from_case_holding(case, Some(&held), &pins);
-    let failed = comm.max(if model.is_err() { 1.0 } else { 0.0 }) > 0.0;
-    let model = match (model, failed) {
-        (Ok(m), false) => m,
-        (Err(e), _) => return Err(StartError::Model(Some(e.to_string()))),
-        (Ok(_), true) => return Err(StartError::Model(None)),
-    };
+    let model = agreed(&*comm, held_model(case, &held, &pins, from))?;
     let part = RankPart::from_held(&model, &owned, &ghosts, layout, facts, reach, Arc::clone(&comm))?;
     drop(model);
     // (rank 0's output needs the named bodies only: the others' meshes are its part's)
     let held = match comm.is_root() {
         true => {
             held.iter_mut().enumerate().for_each(|(b, h)| *h = named.binary_search(&b).is_ok());
-            Some(Model::from_case_holding(case, Some(&held), &pins).map_err(|e| StartError::Model(Some(e.to_string())))?)
+            Some(held_model(case, &held, &pins, from)?)
         }
         false => None,
     };
     Ok(PartStart { part, held, poor })
+}
+
+/// The model of `case` with the bodies `held` meshed ([`Model::from_case_holding`]); with a
+/// checkpoint `from`, the held bodies that were re-meshed before it carry its meshes (as
+/// [`crate::checkpoint::Checkpoint::model`] sets them on the whole model).
+fn held_model(case: &Case, held: &[bool], pins: &[(usize, usize)], from: Option<&CheckpointFile>) -> Result<Model, StartError> {
+    let model = Model::from_case_holding(case, Some(held), pins).map_err(|e| StartError::Model(Some(e.to_string())))?;
+    let Some(ck) = from else { return Ok(model) };
+    let mut changed = Vec::new();
+    for b in (0..held.len()).filter(|&b| held[b]) {
+        let mesh = ck.mesh(b).map_err(|e| StartError::Restart(Some(e.to_string())))?;
+        if !crate::checkpoint::same_mesh(&model.bodies[b].mesh, &mesh) {
+            tracing::debug!(body = b, elements = mesh.n_elements(), "restart: the body has its re-meshed mesh");
+            changed.push((b, mesh));
+        }
+    }
+    match changed.is_empty() {
+        true => Ok(model),
+        false => model.with_body_meshes(changed).map_err(|e| StartError::Restart(Some(mismatch(ck, e.to_string())))),
+    }
+}
+
+/// The message of a checkpoint that does not fit the model of the case.
+fn mismatch(ck: &CheckpointFile, reason: String) -> String {
+    crate::checkpoint::CheckpointError::Mismatch { path: ck.path.clone(), reason }.to_string()
+}
+
+/// The boxes, where the checkpoint `ck` has them, of this process's `share` of the bodies
+/// (held by `shared`; every body's node, element and edge counts `sizes`, `n_nodes` nodes in
+/// all): its rows of the checkpoint's displacements added to their reference coordinates.
+fn boxes_at(ck: &CheckpointFile, shared: &Model, share: &[bool], sizes: &[(usize, usize, usize)], n_nodes: usize) -> Result<Vec<(usize, partition::Particle)>, StartError> {
+    let fail = |reason: String| StartError::Restart(Some(mismatch(ck, reason)));
+    match ck.values("solution/u") {
+        Some(n) if n == 2 * n_nodes => {}
+        n => return Err(fail(format!("the checkpoint has {} displacement dofs, the model {}", n.unwrap_or(0), 2 * n_nodes))),
+    }
+    let mut first = Vec::with_capacity(sizes.len());
+    let mut at = 0;
+    for s in sizes {
+        first.push(at);
+        at += s.0;
+    }
+    let mine: Vec<usize> = (0..share.len()).filter(|&b| share[b]).collect();
+    let rows: Vec<usize> = mine.iter().flat_map(|&b| first[b]..first[b] + sizes[b].0).collect();
+    let u = ck.rows("solution/u", 2, &rows).map_err(|e| StartError::Restart(Some(format!("{}: {e}", ck.path.display()))))?;
+    let mut k = 0;
+    let mut out = Vec::with_capacity(mine.len());
+    for &b in &mine {
+        let body = &shared.bodies[b];
+        let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &shared.x0[body.node_offset..body.node_offset + body.mesh.n_nodes()] {
+            for d in 0..2 {
+                let x = p[d] + u[2 * k + d];
+                min[d] = min[d].min(x);
+                max[d] = max[d].max(x);
+            }
+            k += 1;
+        }
+        out.push((b, partition::Particle { elements: body.mesh.n_elements() as u64, min, max }));
+    }
+    Ok(out)
+}
+
+/// `r`, when every process's is Ok; otherwise an error on every process (collective): its own,
+/// or on rank 0 the first other process's message of a checkpoint that does not fit (a model
+/// that cannot be made is named on rank 0 by the caller, [`StartError::Model`] without one).
+fn agreed<T>(comm: &dyn Collective, r: Result<T, StartError>) -> Result<T, StartError> {
+    if comm.max(if r.is_err() { 1.0 } else { 0.0 }) == 0.0 {
+        return r;
+    }
+    let mine: Vec<(usize, String)> = match &r {
+        Err(StartError::Restart(Some(m))) => vec![(comm.rank(), m.clone())],
+        _ => Vec::new(),
+    };
+    let theirs = texts_to_root(comm, &mine);
+    match r {
+        Err(e) => Err(e),
+        Ok(_) if !theirs.is_empty() => Err(StartError::Restart(theirs.into_iter().next().map(|t| t.1))),
+        Ok(_) if comm.is_root() => Err(StartError::Model(None)),
+        Ok(_) => Err(StartError::Restart(None)),
+    }
 }
 
 /// The bodies that loads, output groups and probes name (point probes: where `pins` places

@@ -43,7 +43,7 @@ mod system;
 pub use barrier::DESCENT_ITERATIONS;
 pub use params::{NewtonKind, SolverSpec, TimeSpec};
 pub use report::{Clock, Compaction, Phase, PhaseScope, RunSummary, StepReport, Timing};
-pub use snapshot::{Gathered, Snapshot};
+pub use snapshot::{Gathered, Snapshot, WholeRows};
 pub use state::{BarrierState, PartitionTotals, RunState, SimScalars, SimState, Solution};
 
 use crate::assembly::{number_equations, AssemblyError, Assembler, ElementFields, FIXED};

@@ -9,7 +9,7 @@
 //! have moved out of their ghost layers, each process grows its part again from its own state
 //! and what the owners of its new ghosts send it ([`Simulation::regrown`]).
 
-use super::{RunState, SimState, Simulation, SolveError, SolverSpec, Solution};
+use super::{RunState, SimScalars, SimState, Simulation, SolveError, SolverSpec, Solution};
 use crate::contact::barrier_problem::Tie;
 use crate::assembly::ElementFields;
 use crate::contact::NodalContact;
@@ -308,44 +308,73 @@ impl Simulation {
         Some(Gathered { state, nodal, complete, bodies })
     }
 
-    /// On a part: continue from `whole`, the whole model's state (a checkpoint's, which every
-    /// process reads): each process takes its nodes', elements' and bodies' values. Without a
-    /// part: [`Simulation::set_state`].
+    /// On a part: continue from `whole`, the whole model's state held in memory: each process
+    /// takes its nodes', elements' and bodies' values ([`Simulation::set_whole_state_from`]).
+    /// Without a part: [`Simulation::set_state`].
     ///
     /// # Errors
-    /// What does not fit (the sizes of the whole model's arrays, or [`Simulation::set_state`]'s).
+    /// As [`Simulation::set_whole_state_from`].
     pub fn set_whole_state(&mut self, whole: SimState) -> Result<(), String> {
-        let Some(p) = &self.sys.part else { return self.set_state(whole) };
-        let w = self.model.whole_facts();
-        let check = |what: &str, got: usize, want: usize| if got == want { Ok(()) } else { Err(format!("{what}: {got} in the checkpoint, {want} in the model")) };
-        check("displacement dofs", whole.sol.u.len(), 2 * w.n_nodes)?;
-        check("previous displacement dofs", whole.u_prev.len(), 2 * w.n_nodes)?;
-        check("element multipliers", whole.sol.lambda.len(), w.n_elements)?;
-        check("body areas", whole.scalars.run.area0_body.len(), w.n_bodies)?;
-        if let Some(d) = &whole.dynamics {
-            for (what, v) in ["dynamic displacements", "velocities", "accelerations", "dynamic forces"].iter().zip(d) {
-                check(what, v.len(), 2 * w.n_nodes)?;
-            }
+        if self.sys.part.is_none() {
+            return self.set_state(whole);
         }
-        let nodes = &p.whole.node;
-        let elements = &p.whole.element;
-        let pick = |v: &[f64]| -> Vec<f64> { nodes.iter().flat_map(|&n| [v[2 * n], v[2 * n + 1]]).collect() };
-        let SimState { mut scalars, sol, u_prev, dynamics } = whole;
-        let f = &sol.fields;
-        let fields = ElementFields {
-            states: elements.iter().map(|&e| f.states[e]).collect(),
-            sig: elements.iter().map(|&e| f.sig[e]).collect(),
-            pressure: elements.iter().map(|&e| f.pressure[e]).collect(),
-            theta: elements.iter().map(|&e| f.theta[e]).collect(),
-            alpha: elements.iter().map(|&e| f.alpha[e]).collect(),
+        let scalars = whole.scalars.clone();
+        self.set_whole_state_from(scalars, &whole)
+    }
+
+    /// Continue from the whole model's state: its `scalars` and its arrays `whole`, of which
+    /// this process reads the rows of its part's nodes and elements only (from a checkpoint's
+    /// file no process reads more, [`crate::checkpoint::CheckpointFile`]); the bodies' areas,
+    /// re-meshing baselines and the barrier's ties are taken for its bodies. Collective on a
+    /// part (every process learns whether one could not take its ties).
+    ///
+    /// # Errors
+    /// What does not fit: an array of another size than the whole model's, a row that cannot
+    /// be read, ties that are not on the part, or what [`Simulation::set_state`] refuses.
+    pub fn set_whole_state_from(&mut self, mut scalars: SimScalars, whole: &dyn WholeRows) -> Result<(), String> {
+        let w = self.model.whole_facts();
+        let (nodes, elements): (Vec<usize>, Vec<usize>) = match &self.sys.part {
+            Some(p) => (p.whole.node.clone(), p.whole.element.clone()),
+            None => ((0..w.n_nodes).collect(), (0..w.n_elements).collect()),
         };
-        let local = Solution { time: sol.time, u: pick(&sol.u), fields, lambda: elements.iter().map(|&e| sol.lambda[e]).collect(), j0: elements.iter().map(|&e| sol.j0[e]).collect() };
-        let area0: Vec<f64> = p.bodies.iter().map(|&b| scalars.run.area0_body[b]).collect();
-        let baseline = p.bodies.iter().map(|&b| scalars.run.remesh_baseline.get(b).cloned().flatten()).collect();
-        scalars.run.area0_body = area0;
-        scalars.run.remesh_baseline = baseline;
-        let u_prev = pick(&u_prev);
-        let dynamics = dynamics.map(|d| d.map(|v| pick(&v)));
+        let read = |name: &str, width: usize, rows: &[usize], count: usize| -> Result<Vec<f64>, String> {
+            match whole.values(name) {
+                Some(n) if n == width * count => whole.rows(name, width, rows),
+                Some(n) => Err(format!("{name}: {n} values in the checkpoint, {} in the model ({count} × {width})", width * count)),
+                None => Err(format!("{name}: not in the checkpoint")),
+            }
+        };
+        let nodal = |name: &str| read(name, 2, &nodes, w.n_nodes);
+        let per_element = |name: &str, width: usize| read(name, width, &elements, w.n_elements);
+        let u = nodal("solution/u")?;
+        let u_prev = nodal("solution/u_prev")?;
+        let dynamics = match whole.values("dynamics/u") {
+            Some(_) => Some([nodal("dynamics/u")?, nodal("dynamics/v")?, nodal("dynamics/a")?, nodal("dynamics/g")?]),
+            None => None,
+        };
+        let lambda = per_element("solution/lambda", 1)?;
+        let j0 = per_element("solution/j0", 1)?;
+        let states = per_element("solution/states", 24)?;
+        let sig = per_element("solution/sig", 16)?;
+        let alpha = per_element("solution/alpha", N_ENH)?;
+        let ne = elements.len();
+        let mut fields = ElementFields::new(ne);
+        for el in 0..ne {
+            for gp in 0..4 {
+                let q = &states[24 * el + 6 * gp..24 * el + 6 * gp + 6];
+                fields.states[el][gp] = crate::material::MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
+                fields.sig[el][gp].copy_from_slice(&sig[16 * el + 4 * gp..16 * el + 4 * gp + 4]);
+            }
+            fields.alpha[el].copy_from_slice(&alpha[N_ENH * el..N_ENH * (el + 1)]);
+        }
+        fields.pressure = per_element("solution/pressure", 1)?;
+        fields.theta = per_element("solution/theta", 1)?;
+        if scalars.run.area0_body.len() != w.n_bodies {
+            return Err(format!("body areas: {} in the checkpoint, {} in the model", scalars.run.area0_body.len(), w.n_bodies));
+        }
+        let bodies: Vec<usize> = self.sys.part.as_ref().map_or_else(|| (0..w.n_bodies).collect(), |p| p.bodies.clone());
+        scalars.run.area0_body = bodies.iter().map(|&b| scalars.run.area0_body[b]).collect();
+        scalars.run.remesh_baseline = bodies.iter().map(|&b| scalars.run.remesh_baseline.get(b).cloned().flatten()).collect();
         if let Some(b) = scalars.barrier.as_mut() {
             // (every process learns whether one could not take its ties, before the
             // collective calls of the state's restore)
@@ -355,7 +384,8 @@ impl Simulation {
             }
             (b.ties, b.tied) = ties?;
         }
-        self.set_state(SimState { scalars, sol: local, u_prev, dynamics })
+        let sol = Solution { time: scalars.time, u, fields, lambda, j0 };
+        self.set_state(SimState { scalars, sol, u_prev, dynamics })
     }
 
     /// On a part: the simulation of this part grown again ([`crate::parallel::part::RankPart::regrow`]),
@@ -528,6 +558,76 @@ impl Simulation {
         let mut held: Vec<(usize, usize)> = tied.iter().filter_map(|&(n, g)| Some((*own.get(&n)?, *local_body.get(&g)?))).collect();
         held.sort_unstable();
         Ok((out, held))
+    }
+}
+
+/// The whole model's arrays of a state, read by rows, named as in a checkpoint
+/// ([`crate::checkpoint`]): `solution/u`, `solution/u_prev` and `dynamics/{u,v,a,g}` (2 values
+/// a node), `solution/{lambda,j0,pressure,theta}` (1 an element), `solution/states` (24),
+/// `solution/sig` (16) and `solution/alpha` ([`N_ENH`]). A state in memory is one; a checkpoint's
+/// file is another, from which each process of a run on parts reads its own rows
+/// ([`Simulation::set_whole_state_from`]).
+pub trait WholeRows {
+    /// How many values the array `name` has (None: it has none, as `dynamics/*` in a static
+    /// analysis).
+    fn values(&self, name: &str) -> Option<usize>;
+    /// The rows `rows` of the array `name`, `width` values a row, in the order of `rows`.
+    ///
+    /// # Errors
+    /// A row beyond the array, or an array that cannot be read.
+    fn rows(&self, name: &str, width: usize, rows: &[usize]) -> Result<Vec<f64>, String>;
+}
+
+impl WholeRows for SimState {
+    fn values(&self, name: &str) -> Option<usize> {
+        let (sol, ne) = (&self.sol, self.sol.lambda.len());
+        match name {
+            "solution/u" => Some(sol.u.len()),
+            "solution/u_prev" => Some(self.u_prev.len()),
+            "solution/lambda" | "solution/j0" | "solution/pressure" | "solution/theta" => Some(self.flat(name)?.len()),
+            "solution/states" => Some(24 * ne),
+            "solution/sig" => Some(16 * ne),
+            "solution/alpha" => Some(N_ENH * ne),
+            _ => Some(self.flat(name)?.len()),
+        }
+    }
+
+    fn rows(&self, name: &str, width: usize, rows: &[usize]) -> Result<Vec<f64>, String> {
+        let n = self.values(name).ok_or_else(|| format!("{name}: no such array"))?;
+        if let Some(&r) = rows.iter().find(|&&r| width * (r + 1) > n) {
+            return Err(format!("{name}: row {r} of {} rows of {width}", n / width.max(1)));
+        }
+        let f = &self.sol.fields;
+        let mut out = Vec::with_capacity(width * rows.len());
+        for &r in rows {
+            match name {
+                "solution/states" => out.extend(f.states[r].iter().flat_map(|q| [q.cp_inv[0], q.cp_inv[1], q.cp_inv[2], q.cp_inv[3], q.eps_p, q.eps_c])),
+                "solution/sig" => out.extend(f.sig[r].iter().flatten()),
+                "solution/alpha" => out.extend_from_slice(&f.alpha[r]),
+                _ => out.extend_from_slice(&self.flat(name).ok_or_else(|| format!("{name}: no such array"))?[width * r..width * (r + 1)]),
+            }
+        }
+        Ok(out)
+    }
+}
+
+impl SimState {
+    /// The array `name` of [`WholeRows`] kept flat in this state.
+    fn flat(&self, name: &str) -> Option<&[f64]> {
+        let (sol, d) = (&self.sol, self.dynamics.as_ref());
+        Some(match name {
+            "solution/u" => &sol.u,
+            "solution/u_prev" => &self.u_prev,
+            "solution/lambda" => &sol.lambda,
+            "solution/j0" => &sol.j0,
+            "solution/pressure" => &sol.fields.pressure,
+            "solution/theta" => &sol.fields.theta,
+            "dynamics/u" => &d?[0],
+            "dynamics/v" => &d?[1],
+            "dynamics/a" => &d?[2],
+            "dynamics/g" => &d?[3],
+            _ => return None,
+        })
     }
 }
 
