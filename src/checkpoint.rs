@@ -34,6 +34,11 @@
 //!
 //! The file is written as `checkpoint.h5.tmp`, flushed and synced to disk, then renamed over
 //! `checkpoint.h5`: a run killed while it writes leaves the previous checkpoint intact.
+//!
+//! A serial run or a replicated model reads all of it ([`Checkpoint::read`]). A run on parts
+//! opens it lazily ([`CheckpointFile::open`]: the seal over every byte, the header, the
+//! scalars) and each process reads its share's meshes and its part's rows of the arrays
+//! ([`CheckpointFile::mesh`], [`WholeRows`]), so that no process holds the whole state.
 
 use crate::solver::{SolverSpec, TimeSpec};
 use crate::mesh::Mesh;
