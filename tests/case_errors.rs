@@ -734,7 +734,7 @@ fn packing_keys_are_checked() {
         ("kind = \"voronoi_polygons\"", "kind = \"discs\"\naspect = 2.0", "packings[0].aspect", &["not a parameter of kind \"discs\""][..]),
         ("kind = \"voronoi_polygons\"", "kind = \"voronoi_ellipses\"\nlloyd = 3", "packings[0].solid_ratio", &["0.7", "inscribed in the cells cover"][..]),
         ("count = 4", "count = 0", "packings[0].count", &["value 0", ">= 1"][..]),
-        ("count = 4", "count = 100000", "packings[0].count", &["at most 5000"][..]),
+        ("count = 4", "count = 100001", "packings[0].count", &["at most 100000"][..]),
         ("seed = 1", "seed = -1", "packings[0].seed", &["value -1", ">= 0"][..]),
         ("solid_ratio = 0.7", "solid_ratio = 1.2", "packings[0].solid_ratio", &["1.2", "(0, 1)"][..]),
         ("solid_ratio = 0.7\n", "", "packings[0].solid_ratio", &["missing"][..]),

@@ -58,8 +58,10 @@ pub const MAX_DIVISIONS: i64 = 100_000;
 /// Default density, t/mm³.
 pub const DEFAULT_DENSITY: f64 = 1e-9;
 
-/// Largest `count` of a `[[packings]]` entry (the cells are built in O(count²)).
-pub const MAX_PACKING_COUNT: usize = 5000;
+/// Largest `count` of a `[[packings]]` entry: the scaling estimates' largest assembly (10⁵).
+/// (The cells are built from each seed's neighbours; pushing discs apart costs about
+/// count^1.5 a sweep.)
+pub const MAX_PACKING_COUNT: usize = 100_000;
 /// Most particles a `[[grids]]` entry may hold (nx × ny): ten times the largest assembly the
 /// scaling estimates consider (10⁵); beyond, the grid's own bookkeeping would not fit a node.
 pub const MAX_GRID_PARTICLES: usize = 1_000_000;
