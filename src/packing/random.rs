@@ -338,10 +338,15 @@ fn power_cells(die: &Die, seeds: &[P], w: &[f64]) -> Vec<Vec<P>> {
         .collect()
 }
 
-/// The seeds sorted into a grid of square buckets over the die, about one seed a bucket.
+/// The seeds sorted into a grid of buckets over the die, about one seed a bucket (at most
+/// one row or column a seed along either side: a die far narrower than a seed's share of it
+/// gets one column).
 struct Buckets {
     x0: P,
+    /// A seed's share of the die, √(area / count): the first ring's radius.
     size: f64,
+    /// A bucket's sides.
+    side: P,
     cols: usize,
     rows: usize,
     /// The seeds of each bucket (row-major).
@@ -350,10 +355,12 @@ struct Buckets {
 
 impl Buckets {
     fn new(die: &Die, seeds: &[P]) -> Self {
-        let size = (die.area() / seeds.len().max(1) as f64).sqrt();
-        let cols = ((die.width() / size).ceil() as usize).max(1);
-        let rows = ((die.height() / size).ceil() as usize).max(1);
-        let mut b = Self { x0: [die.x[0], die.y[0]], size, cols, rows, seeds: vec![Vec::new(); cols * rows] };
+        let n = seeds.len().max(1);
+        let size = (die.area() / n as f64).sqrt();
+        let count = |length: f64| ((length / size).round() as usize).clamp(1, n);
+        let (cols, rows) = (count(die.width()), count(die.height()));
+        let side = [die.width() / cols as f64, die.height() / rows as f64];
+        let mut b = Self { x0: [die.x[0], die.y[0]], size, side, cols, rows, seeds: vec![Vec::new(); cols * rows] };
         for (i, &q) in seeds.iter().enumerate() {
             let (c, r) = b.cell(q);
             b.seeds[r * cols + c].push(i);
@@ -363,8 +370,8 @@ impl Buckets {
 
     /// The bucket holding point `q` (clamped to the grid).
     fn cell(&self, q: P) -> (usize, usize) {
-        let at = |v: f64, n: usize| ((v / self.size).floor().max(0.0) as usize).min(n - 1);
-        (at(q[0] - self.x0[0], self.cols), at(q[1] - self.x0[1], self.rows))
+        let at = |v: f64, side: f64, n: usize| ((v / side).floor().max(0.0) as usize).min(n - 1);
+        (at(q[0] - self.x0[0], self.side[0], self.cols), at(q[1] - self.x0[1], self.side[1], self.rows))
     }
 
     /// The seeds of every bucket that meets the square of half-side `rho` about `p` (a
@@ -753,13 +760,15 @@ mod tests {
     }
 
     /// The power cells from the bucket grid's rings are those of clipping by every seed, to the
-    /// bit: equal and unequal weights (radius ratios 1, 2 and 4, so some cells vanish), a
-    /// narrow die, a seed on a corner and two coincident seeds; and their areas add up to the
+    /// bit: equal and unequal weights (radius ratios 1, 2 and 4, so some cells vanish), narrow
+    /// dies (one a thousandth of a millimetre wide: a few buckets, found by the case fuzz), a
+    /// seed on a corner and two coincident seeds; and their areas add up to the
     /// die's (to 1e-9 relative: a partition of the die, the coincident seeds' cell once).
     #[test]
     fn power_cells_from_rings_are_those_of_every_seed() {
         let mut empty = 0;
-        for (k, (ratio, die)) in [(1.0, Die { x: [0.0, 100.0], y: [0.0, 100.0] }), (2.0, Die { x: [-30.0, 70.0], y: [5.0, 45.0] }), (4.0, Die { x: [0.0, 300.0], y: [0.0, 20.0] })].into_iter().enumerate() {
+        let dies = [(1.0, Die { x: [0.0, 100.0], y: [0.0, 100.0] }), (2.0, Die { x: [-30.0, 70.0], y: [5.0, 45.0] }), (4.0, Die { x: [0.0, 300.0], y: [0.0, 20.0] }), (2.0, Die { x: [0.0, 1e-3], y: [0.0, 100.0] })];
+        for (k, (ratio, die)) in dies.into_iter().enumerate() {
             let mut rng = Stream::new(7 + k as u64);
             let n = 600;
             let mut seeds: Vec<P> = (0..n).map(|_| [die.x[0] + die.width() * rng.unit(), die.y[0] + die.height() * rng.unit()]).collect();
@@ -767,6 +776,9 @@ mod tests {
             seeds[3] = seeds[2];
             let radii = draw_radii(&mut rng, n, Sizes::Uniform { ratio });
             let w = weights(&die, &radii);
+            // (a die far narrower than a seed's share gets one column, not millions of buckets)
+            let buckets = Buckets::new(&die, &seeds);
+            assert!(buckets.cols * buckets.rows <= 3 * n + 1, "die {k}: {} × {} buckets for {n} seeds", buckets.cols, buckets.rows);
             let fast = power_cells(&die, &seeds, &w);
             let all = power_cells_by_all(&die, &seeds, &w);
             for (i, (a, b)) in fast.iter().zip(&all).enumerate() {
