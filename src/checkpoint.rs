@@ -134,9 +134,11 @@ pub enum CheckpointError {
     Mismatch { path: PathBuf, reason: String },
 }
 
-/// A checkpoint read back ([`Checkpoint::read`]).
+/// What names a checkpoint: its file, layout, writer, case and step, and the caller's record
+/// ([`CheckpointHead::run_state`]). Both ways of reading one ([`Checkpoint`],
+/// [`CheckpointFile`]) dereference to it.
 #[derive(Clone, Debug)]
-pub struct Checkpoint {
+pub struct CheckpointHead {
     pub path: PathBuf,
     /// The layout's version ([`FORMAT_VERSION`], or an older one still read).
     pub format_version: u32,
@@ -144,10 +146,33 @@ pub struct Checkpoint {
     pub case_sha256: String,
     pub step: usize,
     pub time: f64,
+    run: Vec<u8>,
+}
+
+impl CheckpointHead {
+    /// The caller's record written with the checkpoint ([`write`]'s `run`).
+    ///
+    /// # Errors
+    /// [`CheckpointError::Corrupt`] when it is not a `T`.
+    pub fn run_state<T: DeserializeOwned>(&self) -> Result<T, CheckpointError> {
+        ciborium::from_reader(self.run.as_slice()).map_err(|e| CheckpointError::Corrupt { path: self.path.clone(), reason: format!("run: {e}") })
+    }
+}
+
+/// A checkpoint read back whole ([`Checkpoint::read`]).
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    pub head: CheckpointHead,
     /// Each body's mesh at the checkpoint.
     pub meshes: Vec<Mesh>,
     pub state: SimState,
-    run: Vec<u8>,
+}
+
+impl std::ops::Deref for Checkpoint {
+    type Target = CheckpointHead;
+    fn deref(&self) -> &CheckpointHead {
+        &self.head
+    }
 }
 
 fn h5err(path: &Path) -> impl Fn(hdf5::Error) -> CheckpointError + '_ {
@@ -386,25 +411,7 @@ impl Checkpoint {
             meshes.push(read_mesh(f, &format!("meshes/{name}"), &checked)?);
         }
         let sol = Solution { time: scalars.time, u, fields, lambda, j0 };
-        Ok(Self {
-            path: path.to_path_buf(),
-            format_version: head.version,
-            mpfem_version: head.mpfem_version,
-            case_sha256: head.case_sha256,
-            step: head.step as usize,
-            time: head.time,
-            meshes,
-            state: SimState { scalars, sol, u_prev, dynamics },
-            run,
-        })
-    }
-
-    /// The caller's record written with the checkpoint ([`write`]'s `run`).
-    ///
-    /// # Errors
-    /// [`CheckpointError::Corrupt`] when it is not a `T`.
-    pub fn run_state<T: DeserializeOwned>(&self) -> Result<T, CheckpointError> {
-        ciborium::from_reader(self.run.as_slice()).map_err(|e| CheckpointError::Corrupt { path: self.path.clone(), reason: format!("run: {e}") })
+        Ok(Self { head: head.named(path, run), meshes, state: SimState { scalars, sol, u_prev, dynamics } })
     }
 
     /// The model at the checkpoint: `base` (the model of the case) with the meshes of the
@@ -458,17 +465,10 @@ impl Checkpoint {
 /// ([`crate::case::parts`]). [`CheckpointFile::read`] reads all of it (a serial run or a
 /// replicated model).
 pub struct CheckpointFile {
-    pub path: PathBuf,
-    /// The layout's version ([`FORMAT_VERSION`], or an older one still read).
-    pub format_version: u32,
-    pub mpfem_version: String,
-    pub case_sha256: String,
-    pub step: usize,
-    pub time: f64,
+    pub head: CheckpointHead,
     /// The solver's scalars (counters, contact histories, the barrier's ties: whole-model
     /// numbering).
     pub scalars: SimScalars,
-    run: Vec<u8>,
     /// Each body's group under `meshes/`, in body order.
     bodies: Vec<String>,
     file: hdf5::File,
@@ -505,7 +505,7 @@ impl CheckpointFile {
         let run = head.bytes(&file, "run").map_err(corrupt)?;
         let mut bodies = file.group("meshes").and_then(|g| g.member_names()).map_err(|err| corrupt(format!("meshes: {err}")))?;
         bodies.sort();
-        Ok(Self { path, format_version: head.version, mpfem_version: head.mpfem_version, case_sha256: head.case_sha256, step: head.step as usize, time: head.time, scalars, run, bodies, file })
+        Ok(Self { head: head.named(&path, run), scalars, bodies, file })
     }
 
     /// All of the checkpoint (each dataset checked against its checksum).
@@ -514,14 +514,6 @@ impl CheckpointFile {
     /// As [`Checkpoint::read`].
     pub fn read(&self) -> Result<Checkpoint, CheckpointError> {
         Checkpoint::read_h5(&self.file, &self.path).map_err(|reason| CheckpointError::Corrupt { path: self.path.clone(), reason })
-    }
-
-    /// The caller's record written with the checkpoint ([`write`]'s `run`).
-    ///
-    /// # Errors
-    /// [`CheckpointError::Corrupt`] when it is not a `T`.
-    pub fn run_state<T: DeserializeOwned>(&self) -> Result<T, CheckpointError> {
-        ciborium::from_reader(self.run.as_slice()).map_err(|e| CheckpointError::Corrupt { path: self.path.clone(), reason: format!("run: {e}") })
     }
 
     /// How many bodies the checkpoint has meshes of.
@@ -538,6 +530,13 @@ impl CheckpointFile {
         let name = self.bodies.get(b).ok_or_else(|| corrupt(format!("body {b}: the checkpoint has meshes of {} bodies", self.bodies.len())))?;
         // (the bytes were checked against the file's seal; a version 1 file has no checksums)
         read_mesh(&self.file, &format!("meshes/{name}"), &|_: &str, _: &hdf5::Dataset, _: String| Ok(())).map_err(corrupt)
+    }
+}
+
+impl std::ops::Deref for CheckpointFile {
+    type Target = CheckpointHead;
+    fn deref(&self) -> &CheckpointHead {
+        &self.head
     }
 }
 
@@ -624,6 +623,11 @@ impl Header {
             return Err(format!("time: {time}; expected a finite time ≥ 0"));
         }
         Ok(Self { version, mpfem_version, case_sha256, step, time })
+    }
+
+    /// The head of the checkpoint at `path` with this header and the caller's record `run`.
+    fn named(self, path: &Path, run: Vec<u8>) -> CheckpointHead {
+        CheckpointHead { path: path.to_path_buf(), format_version: self.version, mpfem_version: self.mpfem_version, case_sha256: self.case_sha256, step: self.step as usize, time: self.time, run }
     }
 
     /// A dataset's values checked against its checksum (version 2 on).
