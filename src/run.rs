@@ -592,7 +592,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
                 }
                 (sim, None, held, Some(reach))
             }
-            Err(e) => return Ok(bad_input(true, reporter, format!("{label}: {e}"))),
+            Err(e) => return Ok(bad_input(true, reporter, e.message(label))),
         },
         None => {
             let model = match whole_model() {
@@ -624,7 +624,7 @@ pub fn run(mut c: Case, label: &str, case_file: Option<CaseFile>, opts: &RunOpti
             let (sim, whole, reach) = if parts {
                 match part_start(&c, &comm, Some(&ck)) {
                     Ok(FreshPart { sim, held, reach, .. }) => (sim, held, Some(reach)),
-                    Err(e) => return Ok(bad_input(true, reporter, e)),
+                    Err(e) => return Ok(bad_input(true, reporter, e.message(label))),
                 }
             } else {
                 let model = match whole_model() {
@@ -1136,7 +1136,7 @@ struct FreshPart {
 /// reach and (rank 0, a fresh run) the poorly meshed bodies. Collective. A case that does not
 /// make a model is named by the whole model's own message on rank 0 ([`Model::from_case`],
 /// built then for that alone); a checkpoint that does not fit, by "cannot restart: …".
-fn part_start(c: &Case, comm: &Arc<dyn Collective>, from: Option<&CheckpointFile>) -> Result<FreshPart, String> {
+fn part_start(c: &Case, comm: &Arc<dyn Collective>, from: Option<&CheckpointFile>) -> Result<FreshPart, PartStartError> {
     use crate::case::parts::{start_part_from, StartError};
     let t = Instant::now();
     match start_part_from(c, Arc::clone(comm), POOR_SCALED_JACOBIAN, from) {
@@ -1152,24 +1152,41 @@ fn part_start(c: &Case, comm: &Arc<dyn Collective>, from: Option<&CheckpointFile
                 "this process's part is made from the case (no process built the whole model)"
             );
             let sim = match from {
-                None => Simulation::new_part(s.part, c.time, c.solver).map_err(|e| e.to_string())?,
+                None => Simulation::new_part(s.part, c.time, c.solver).map_err(|e| PartStartError::Case(e.to_string()))?,
                 Some(ck) => {
-                    let mut sim = Simulation::new_part_for_state(s.part, c.time, c.solver).map_err(|e| e.to_string())?;
+                    let mut sim = Simulation::new_part_for_state(s.part, c.time, c.solver).map_err(|e| PartStartError::Case(e.to_string()))?;
                     // (collective: every process learns whether one could not take its state)
-                    let set = sim.set_whole_state_from(ck.scalars.clone(), ck).map_err(|e| format!("cannot restart: {}: {e}", ck.path.display()));
+                    let set = sim.set_whole_state_from(ck.scalars.clone(), ck).map_err(|e| PartStartError::Restart(format!("cannot restart: {}: {e}", ck.path.display())));
                     let failed = comm.max(if set.is_err() { 1.0 } else { 0.0 }) > 0.0;
                     match (set, failed) {
                         (Err(e), _) => return Err(e),
-                        (Ok(()), true) => return Err("cannot restart: another process could not take its part of the checkpoint's state".into()),
+                        (Ok(()), true) => return Err(PartStartError::Restart("cannot restart: another process could not take its part of the checkpoint's state".into())),
                         (Ok(()), false) => sim,
                     }
                 }
             };
             Ok(FreshPart { sim, held: s.held, reach, poor: s.poor })
         }
-        Err(StartError::Model(seen)) if comm.is_root() => Err(Model::from_case(c).err().map(|e| e.to_string()).or(seen).unwrap_or_else(|| "a process could not build its part of the model".into())),
-        Err(e @ StartError::Restart(_)) => Err(format!("cannot restart: {e}")),
-        Err(e) => Err(e.to_string()),
+        Err(StartError::Model(seen)) if comm.is_root() => Err(PartStartError::Case(Model::from_case(c).err().map(|e| e.to_string()).or(seen).unwrap_or_else(|| "a process could not build its part of the model".into()))),
+        Err(e @ StartError::Restart(_)) => Err(PartStartError::Restart(format!("cannot restart: {e}"))),
+        Err(e) => Err(PartStartError::Case(e.to_string())),
+    }
+}
+
+/// Why [`part_start`] made no part: the case (its message, which the caller prefixes with the
+/// case's label) or the checkpoint of a restart ("cannot restart: …", whole).
+enum PartStartError {
+    Case(String),
+    Restart(String),
+}
+
+impl PartStartError {
+    /// The line for the user, the case named by `label`.
+    fn message(self, label: &str) -> String {
+        match self {
+            Self::Case(e) => format!("{label}: {e}"),
+            Self::Restart(e) => e,
+        }
     }
 }
 
@@ -1183,7 +1200,8 @@ fn run_part_rank(c: &Case, comm: Arc<dyn Collective>, checkpoint: Option<Checkpo
         Some(ck) if ck.run_state::<RunState>().is_err() => return Ok(RunOutcome::BadInput("cannot restart: the checkpoint's run record".into())),
         ck => match part_start(c, &comm, ck.as_ref()) {
             Ok(FreshPart { sim, reach, .. }) => (Ok(sim), reach),
-            Err(e) => (Err(e), 0.0),
+            // (rank 0 says why)
+            Err(e) => (Err(e.message("this process's part")), 0.0),
         },
     };
     let mut sim = match sim {
