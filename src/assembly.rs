@@ -80,6 +80,25 @@ impl ElementFields {
             alpha: vec![[0.0; N_ENH]; n_elements],
         }
     }
+
+    /// The fields of `pressure.len()` elements from their records as a checkpoint stores them
+    /// (per element: `states` 4 Gauss points × `cp_inv[4], eps_p, eps_c`, `sig` 4 × 4, `alpha`
+    /// [`N_ENH`]).
+    pub fn from_records(states: &[f64], sig: &[f64], alpha: &[f64], pressure: Vec<f64>, theta: Vec<f64>) -> Self {
+        let ne = pressure.len();
+        let mut f = Self::new(ne);
+        for el in 0..ne {
+            for gp in 0..4 {
+                let q = &states[24 * el + 6 * gp..24 * el + 6 * gp + 6];
+                f.states[el][gp] = MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
+                f.sig[el][gp].copy_from_slice(&sig[16 * el + 4 * gp..16 * el + 4 * gp + 4]);
+            }
+            f.alpha[el].copy_from_slice(&alpha[N_ENH * el..N_ENH * (el + 1)]);
+        }
+        f.pressure = pressure;
+        f.theta = theta;
+        f
+    }
 }
 
 /// The assembly plan of one model topology and the current pattern of its terms.

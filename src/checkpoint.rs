@@ -382,23 +382,8 @@ impl Checkpoint {
         let theta = per_element("solution/theta", 1)?;
         let states = per_element("solution/states", 24)?;
         let sig = per_element("solution/sig", 16)?;
-        let mut fields = crate::assembly::ElementFields::new(ne);
-        let n_enh = fields.alpha.first().map_or(0, |a| a.len());
-        let alpha = per_element("solution/alpha", n_enh)?;
-        for el in 0..ne {
-            for gp in 0..4 {
-                let q = &states[24 * el + 6 * gp..24 * el + 6 * gp + 6];
-                fields.states[el][gp] = crate::material::MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
-                for c in 0..4 {
-                    fields.sig[el][gp][c] = sig[16 * el + 4 * gp + c];
-                }
-            }
-            for k in 0..n_enh {
-                fields.alpha[el][k] = alpha[n_enh * el + k];
-            }
-        }
-        fields.pressure = pressure;
-        fields.theta = theta;
+        let alpha = per_element("solution/alpha", crate::element::N_ENH)?;
+        let fields = crate::assembly::ElementFields::from_records(&states, &sig, &alpha, pressure, theta);
         let dynamics = if f.link_exists("dynamics") {
             Some([f64s("dynamics/u")?, f64s("dynamics/v")?, f64s("dynamics/a")?, f64s("dynamics/g")?])
         } else {

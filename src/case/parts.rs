@@ -131,21 +131,6 @@ pub fn start_part_from(case: &Case, comm: Arc<dyn Collective>, poor_below: f64, 
     if seen.iter().any(|s| !s) {
         return Err(StartError::Model(Some(format!("{} of {nb} bodies were not gathered", seen.iter().filter(|s| !**s).count()))));
     }
-    // (a restart: the ghosts are chosen where the particles are at the checkpoint)
-    let now = match from {
-        Some(ck) => Some(agreed(&*comm, boxes_at(ck, &shared, &share, &sizes, facts.n_nodes))?),
-        None => None,
-    };
-    let now = match now {
-        Some(own) => {
-            let (now, known) = crate::parallel::part::all_boxes(&*comm, own.into_iter(), nb);
-            if known.iter().any(|k| !k) {
-                return Err(StartError::Restart(Some(format!("{} of {nb} bodies' places at the checkpoint were not gathered", known.iter().filter(|k| !**k).count()))));
-            }
-            Some(now)
-        }
-        None => None,
-    };
     // where the point probes are: the first body holding the point, as the whole model finds it
     let mut found = Vec::new();
     for (i, p) in case.output.probes.iter().enumerate() {
@@ -182,7 +167,6 @@ pub fn start_part_from(case: &Case, comm: Arc<dyn Collective>, poor_below: f64, 
             return Err(StartError::Outside(outside.into_iter().next().map(|(_, m)| m)));
         }
     }
-    drop(shared);
     // 2. the owners (rank 0's partition) and the close pairs they split
     let mut owner = vec![0.0; nb + 1];
     if comm.is_root() {
@@ -202,6 +186,12 @@ pub fn start_part_from(case: &Case, comm: Arc<dyn Collective>, poor_below: f64, 
     let layout = Arc::new(BodyLayout { edge_cut, ..BodyLayout::from_sizes(owner.clone(), sizes, &fixed) });
     // 3. this process's bodies, its ghosts and the named ones, meshed; its part of them
     let reach = RankPart::reach_of(&boxes, facts.h_min);
+    // (a restart: the ghosts are chosen where the particles are at the checkpoint)
+    let now = match from {
+        Some(ck) => Some(boxes_at(ck, &*comm, &shared, &share, &layout)?),
+        None => None,
+    };
+    drop(shared);
     let ghosts = crate::parallel::part::ghost_bodies(now.as_ref().unwrap_or(&boxes), &owner, rank, reach).map_err(PartError::from)?;
     drop(boxes);
     drop(now);
@@ -250,40 +240,30 @@ fn mismatch(ck: &CheckpointFile, reason: String) -> String {
     crate::checkpoint::CheckpointError::Mismatch { path: ck.path.clone(), reason }.to_string()
 }
 
-/// The boxes, where the checkpoint `ck` has them, of this process's `share` of the bodies
-/// (held by `shared`; every body's node, element and edge counts `sizes`, `n_nodes` nodes in
-/// all): its rows of the checkpoint's displacements added to their reference coordinates.
-fn boxes_at(ck: &CheckpointFile, shared: &Model, share: &[bool], sizes: &[(usize, usize, usize)], n_nodes: usize) -> Result<Vec<(usize, partition::Particle)>, StartError> {
+/// Every body's box where the checkpoint `ck` has it: each process adds its rows of the
+/// checkpoint's displacements to the reference coordinates of its `share` of the bodies (the
+/// nodes of `shared`, which holds that share only, in body order; `layout` places them in the
+/// whole model), and the boxes are all-gathered. Collective.
+fn boxes_at(ck: &CheckpointFile, comm: &dyn Collective, shared: &Model, share: &[bool], layout: &BodyLayout) -> Result<Vec<partition::Particle>, StartError> {
     let fail = |reason: String| StartError::Restart(Some(mismatch(ck, reason)));
-    match ck.values("solution/u") {
-        Some(n) if n == 2 * n_nodes => {}
-        n => return Err(fail(format!("the checkpoint has {} displacement dofs, the model {}", n.unwrap_or(0), 2 * n_nodes))),
-    }
-    let mut first = Vec::with_capacity(sizes.len());
-    let mut at = 0;
-    for s in sizes {
-        first.push(at);
-        at += s.0;
-    }
     let mine: Vec<usize> = (0..share.len()).filter(|&b| share[b]).collect();
-    let rows: Vec<usize> = mine.iter().flat_map(|&b| first[b]..first[b] + sizes[b].0).collect();
-    let u = ck.rows("solution/u", 2, &rows).map_err(|e| StartError::Restart(Some(format!("{}: {e}", ck.path.display()))))?;
-    let mut k = 0;
-    let mut out = Vec::with_capacity(mine.len());
-    for &b in &mine {
-        let body = &shared.bodies[b];
-        let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in &shared.x0[body.node_offset..body.node_offset + body.mesh.n_nodes()] {
-            for d in 0..2 {
-                let x = p[d] + u[2 * k + d];
-                min[d] = min[d].min(x);
-                max[d] = max[d].max(x);
-            }
-            k += 1;
+    let read = || -> Result<Vec<[f64; 2]>, StartError> {
+        let n_nodes: usize = layout.n_nodes.iter().sum();
+        match ck.values("solution/u") {
+            Some(n) if n == 2 * n_nodes => {}
+            n => return Err(fail(format!("the checkpoint has {} displacement dofs, the model {}", n.unwrap_or(0), 2 * n_nodes))),
         }
-        out.push((b, partition::Particle { elements: body.mesh.n_elements() as u64, min, max }));
+        let rows: Vec<usize> = mine.iter().flat_map(|&b| layout.node_offset[b]..layout.node_offset[b] + layout.n_nodes[b]).collect();
+        let u = ck.rows("solution/u", 2, &rows).map_err(|e| StartError::Restart(Some(format!("{}: {e}", ck.path.display()))))?;
+        Ok(shared.x0.iter().zip(u.chunks_exact(2)).map(|(p, d)| [p[0] + d[0], p[1] + d[1]]).collect())
+    };
+    let x = agreed(comm, read())?;
+    let own = crate::distribute::particles_at(shared, &x);
+    let (boxes, known) = crate::parallel::part::all_boxes(comm, mine.iter().map(|&b| (b, own[b])), share.len());
+    match known.iter().filter(|k| !**k).count() {
+        0 => Ok(boxes),
+        missing => Err(StartError::Restart(Some(format!("{missing} of {} bodies' places at the checkpoint were not gathered", share.len())))),
     }
-    Ok(out)
 }
 
 /// `r`, when every process's is Ok; otherwise an error on every process (collective): its own,

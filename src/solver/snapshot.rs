@@ -357,18 +357,7 @@ impl Simulation {
         let states = per_element("solution/states", 24)?;
         let sig = per_element("solution/sig", 16)?;
         let alpha = per_element("solution/alpha", N_ENH)?;
-        let ne = elements.len();
-        let mut fields = ElementFields::new(ne);
-        for el in 0..ne {
-            for gp in 0..4 {
-                let q = &states[24 * el + 6 * gp..24 * el + 6 * gp + 6];
-                fields.states[el][gp] = crate::material::MatState { cp_inv: [q[0], q[1], q[2], q[3]], eps_p: q[4], eps_c: q[5] };
-                fields.sig[el][gp].copy_from_slice(&sig[16 * el + 4 * gp..16 * el + 4 * gp + 4]);
-            }
-            fields.alpha[el].copy_from_slice(&alpha[N_ENH * el..N_ENH * (el + 1)]);
-        }
-        fields.pressure = per_element("solution/pressure", 1)?;
-        fields.theta = per_element("solution/theta", 1)?;
+        let fields = ElementFields::from_records(&states, &sig, &alpha, per_element("solution/pressure", 1)?, per_element("solution/theta", 1)?);
         if scalars.run.area0_body.len() != w.n_bodies {
             return Err(format!("body areas: {} in the checkpoint, {} in the model", scalars.run.area0_body.len(), w.n_bodies));
         }
@@ -580,15 +569,12 @@ pub trait WholeRows {
 
 impl WholeRows for SimState {
     fn values(&self, name: &str) -> Option<usize> {
-        let (sol, ne) = (&self.sol, self.sol.lambda.len());
+        let ne = self.sol.lambda.len();
         match name {
-            "solution/u" => Some(sol.u.len()),
-            "solution/u_prev" => Some(self.u_prev.len()),
-            "solution/lambda" | "solution/j0" | "solution/pressure" | "solution/theta" => Some(self.flat(name)?.len()),
             "solution/states" => Some(24 * ne),
             "solution/sig" => Some(16 * ne),
             "solution/alpha" => Some(N_ENH * ne),
-            _ => Some(self.flat(name)?.len()),
+            _ => self.flat(name).map(<[f64]>::len),
         }
     }
 
