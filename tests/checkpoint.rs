@@ -148,7 +148,7 @@ fn restart_from_a_periodic_checkpoint_is_bit_for_bit() {
 /// distance the next doubling compares with, the ties of cohering particles with their
 /// multipliers, and whether the steps descend on the potential from their start. 2 × 2 J2
 /// discs, biaxial, with the barrier: once with friction μ = 0.2 (lagged
-/// at each step's start from the converged state; with `max_iterations = 12` step 4 fails its
+/// at each step's start from the converged state; with `max_iterations = 8` step 7 fails its
 /// first attempt and the descent is on from there: the run with the default 100 needs no
 /// retry, and the restart must be shown to carry the descent) and once
 /// cohering (no step needs the descent), a checkpoint every 11 steps. The checkpoint holds
@@ -167,7 +167,7 @@ fn barrier_restart_is_bit_for_bit() {
             .replace("method = \"penalty\"\ncontact = \"sliding\"", &format!("method = \"barrier\"\ncontact = \"{kind}\"{extra}"));
         if kind == "rubbing" {
             assert!(text.contains("[solver]\n"));
-            text = text.replace("[solver]\n", "[solver]\nmax_iterations = 12\n");
+            text = text.replace("[solver]\n", "[solver]\nmax_iterations = 8\n");
         }
         assert!(text.contains(&format!("contact = \"{kind}\"")));
         let case = dir.join("case.toml");
@@ -184,12 +184,12 @@ fn barrier_restart_is_bit_for_bit() {
         assert!(saved.min_distance.is_finite(), "{kind}: smallest distance {}", saved.min_distance);
         // the descent is on for the rest of the run once a step needed the retry that descends
         // on the potential (a cut-back in history.csv), and the restart must start its first
-        // step with it: rubbing needs it at step 8, before the checkpoint; cohering (with the
+        // step with it: rubbing needs it at step 7, before the checkpoint; cohering (with the
         // default springs ζ = 1e-8) needs it nowhere, so there the checkpoint holds it off
         let retried = column(&history_lines(&a), "cutbacks")[..ck].iter().any(|&c| c > 0.0);
         assert_eq!(saved.descent, retried, "{kind}: descent at the checkpoint vs a cut-back before it");
         if kind == "rubbing" {
-            assert!(saved.descent, "rubbing: the retry at step 4 should have switched the descent on");
+            assert!(saved.descent, "rubbing: the retry at step 7 should have switched the descent on");
         }
         if kind == "cohering" {
             assert!(!saved.ties.is_empty() && !saved.tied.is_empty(), "cohering: no ties at the checkpoint");

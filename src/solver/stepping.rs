@@ -395,8 +395,8 @@ impl Simulation {
         let t = self.sol.time + dt;
         let inc = TimeIncrement { time: t, dt };
         self.prepare_contact(dt)?;
-        // prediction (none with the barrier: its Newton starts from the converged, collision-
-        // free configuration, and the line search moves the walls)
+        // prediction (with the barrier the last increment extrapolated as far as it is
+        // collision-free, the walls with it: `barrier_predictor`)
         let mut u = self.sol.u.clone();
         let barrier = self.barrier.is_some();
         if self.run.dt_prev > 0.0 && !barrier {
@@ -411,6 +411,9 @@ impl Simulation {
         if let Some(dy) = self.dynamics.as_ref() {
             dy.predict(&mut u, dt, &self.sys.assembler.eq); // Newmark predictor (a_{n+1} = 0)
         }
+        if barrier && self.dynamics.is_none() {
+            self.barrier_predictor(&mut u, dt)?;
+        }
         if self.run.dt_prev == 0.0 && self.dynamics.is_none() && !barrier {
             // no increment to extrapolate (first step): linearised prediction instead
             if let Err(e) = self.tangent_predictor(&mut u, inc) {
@@ -422,6 +425,23 @@ impl Simulation {
         let restart = self.run.dt_prev > 0.0;
         let trial = self.solve_from(u, inc, restart)?;
         self.leave_saddle(trial, inc)
+    }
+
+    /// The tangent of a step's converged end, for verification: a step of `dt` tried from the
+    /// committed state as [`Simulation::advance`] tries it first (no retry, no cut-back), and
+    /// the assembled tangent (the free equations, both triangles) evaluated exactly at its
+    /// converged displacements, with nothing projected or shifted. The step is not committed:
+    /// the state stays the last converged one, but the trial's contact and pattern remain,
+    /// so the simulation is for inspection only afterwards.
+    ///
+    /// # Errors
+    /// The step's failure, when it does not converge.
+    pub fn tangent_after_step(&mut self, dt: f64) -> Result<crate::linalg::csr::CsrMatrix, NewtonFailure> {
+        let trial = self.try_step(dt)?;
+        let inc = TimeIncrement { time: self.sol.time + dt, dt };
+        let vol = self.volumetric(&trial.lambda);
+        self.evaluate(&trial.u, inc, &vol, true)?;
+        Ok(self.sys.kk.clone())
     }
 
     /// Commit a converged step: states, displacements, multipliers, time; build its report.
