@@ -4,8 +4,8 @@
 //!   aluminium discs with Coulomb friction 0.2, from the converged state after 4 steps
 //!   (contact established; the state is restored before every sample, so each sample is the
 //!   same step: pair selection, pattern, Newton with assembly, contact, factorisation);
-//!   `step_discs_4x4_unaccelerated` the same step without the barrier's predictor and its
-//!   double step at double roots (`Simulation::set_barrier_acceleration`), for their gain.
+//!   `step_discs_4x4_single` the same step without the barrier's double step at double roots
+//!   (`Simulation::set_barrier_double_step`), for its gain.
 //! - `pair_change_*`: the assembler's pattern switched between the pair sets of two
 //!   configurations of a disc grid (`bench_support::pair_change_fixture`: every other disc
 //!   moved by 0.4 element sizes, so the contact zones have other pairs), incrementally
@@ -28,9 +28,9 @@ fn step(c: &mut Criterion) {
     let state = sim.state();
     let mut g = c.benchmark_group("step");
     g.sample_size(10);
-    // (the default, then without the barrier's predictor and double step: their gain in one run)
-    for (name, on) in [("step_discs_4x4", true), ("step_discs_4x4_unaccelerated", false)] {
-        sim.set_barrier_acceleration(on, on);
+    // (the default, then without the barrier's double step: its gain in one run)
+    for (name, on) in [("step_discs_4x4", true), ("step_discs_4x4_single", false)] {
+        sim.set_barrier_double_step(on);
         sim.set_state(state.clone()).expect("state");
         let its = sim.advance(0.05).expect("a converged step").newton_iterations;
         eprintln!("{name}: {its} Newton iterations");
@@ -41,7 +41,7 @@ fn step(c: &mut Criterion) {
             })
         });
     }
-    sim.set_barrier_acceleration(true, true);
+    sim.set_barrier_double_step(true);
     g.finish();
 }
 

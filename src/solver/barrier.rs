@@ -125,9 +125,6 @@ pub(super) struct BarrierRun {
     /// Whether the line search turns the particles a Newton update rotates by their exact
     /// rotation (`newton::turned_point`); off only to measure what it gains.
     pub turn: bool,
-    /// Whether a step starts from the extrapolated predictor (`Simulation::barrier_predictor`);
-    /// off only to measure what it gains.
-    pub predict: bool,
     /// Whether Newton takes the update twice over at a double root (`newton::double_root`);
     /// off only to measure what it gains.
     pub double: bool,
@@ -172,7 +169,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true, predict: true, double: true }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true, double: true }
     }
 
     /// The round-off of the ties' forces, after ties were made: `n_ties` of them in the whole

@@ -641,12 +641,12 @@ impl Simulation {
         Ok(())
     }
 
-    /// Switch the barrier's predictor and its double step at double roots off or on (both on
-    /// by default; nothing to switch without the barrier). For benchmarks and tests that
-    /// measure what they gain; no case key reaches it.
-    pub fn set_barrier_acceleration(&mut self, predict: bool, double: bool) {
+    /// Switch the barrier's double step at double roots off or on (on by default; nothing to
+    /// switch without the barrier). For benchmarks and tests that measure what it gains; no
+    /// case key reaches it.
+    pub fn set_barrier_double_step(&mut self, on: bool) {
         if let Some(b) = self.barrier.as_mut() {
-            (b.predict, b.double) = (predict, double);
+            b.double = on;
         }
     }
 

@@ -1,9 +1,8 @@
 //! The Newton solve of a step: full or modified Newton–Raphson with a backtracking line
 //! search on the residual and the energy, the convergence tests, the loops of the
 //! augmented-Lagrangian updates (incompressible elements and contact multipliers) around it,
-//! the linearised predictor of a first step, the barrier's extrapolating predictor and its
-//! double step at a double root, and the release of an out-of-balance force in increments (a
-//! re-meshed state).
+//! the linearised predictor of a first step, the barrier's double step at a double root, and
+//! the release of an out-of-balance force in increments (a re-meshed state).
 
 use super::{NewtonFailure, Simulation, Trial};
 use crate::assembly::FIXED;
@@ -64,50 +63,6 @@ fn potential_change(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>)
 /// nothing, and a step that does not raise the residual is taken on that instead.
 fn within_round_off(eta: f64, g0: f64, slope: f64, barrier: Option<BarrierLine>) -> bool {
     barrier.is_some_and(|b| potential_change(eta, g0, slope, barrier).abs() <= 1e-10 * b.energy0.abs().max(b.energy.abs()))
-}
-
-/// The positions of one particle's nodes (reference `x0`) extrapolated from their
-/// displacements `u_prev` and `u` at the last two steps by a fraction `s` of the last step,
-/// written as displacements to `out`: its centroid moved on by s Δc, its nodes turned by sθ
-/// about it, where Δc and θ are the last step's rigid motion (the least-squares fit of a
-/// rotation, exact for a rigid one), and the rest of each node's change (its deformation) added
-/// s times, turned with it. A particle that moved rigidly is moved on rigidly; one that did
-/// not turn gets the plain linear extrapolation u + s (u − u_prev).
-fn extrapolate_turning(x0: &[[f64; 2]], u_prev: &[f64], u: &[f64], s: f64, out: &mut [f64]) {
-    let n = x0.len();
-    let at = |v: &[f64], k: usize| [x0[k][0] + v[2 * k], x0[k][1] + v[2 * k + 1]];
-    let centre = |v: &[f64]| {
-        let mut c = [0.0; 2];
-        for k in 0..n {
-            let p = at(v, k);
-            c[0] += p[0] / n as f64;
-            c[1] += p[1] / n as f64;
-        }
-        c
-    };
-    let (c0, c1) = (centre(u_prev), centre(u));
-    let (mut sn, mut cs) = (0.0, 0.0);
-    for k in 0..n {
-        let (p, q) = (at(u_prev, k), at(u, k));
-        let (a, b) = ([p[0] - c0[0], p[1] - c0[1]], [q[0] - c1[0], q[1] - c1[1]]);
-        sn += a[0] * b[1] - a[1] * b[0];
-        cs += a[0] * b[0] + a[1] * b[1];
-    }
-    let theta = sn.atan2(cs);
-    let rot = |t: f64, v: [f64; 2]| {
-        let (sa, ca) = t.sin_cos();
-        [ca * v[0] - sa * v[1], sa * v[0] + ca * v[1]]
-    };
-    for k in 0..n {
-        let (p, q) = (at(u_prev, k), at(u, k));
-        let (a, b) = ([p[0] - c0[0], p[1] - c0[1]], [q[0] - c1[0], q[1] - c1[1]]);
-        // the node's own change in the last step, after its particle's rigid motion
-        let turned = rot(theta, a);
-        let rel = rot(s * theta, [b[0] + s * (b[0] - turned[0]), b[1] + s * (b[1] - turned[1])]);
-        for i in 0..2 {
-            out[2 * k + i] = c1[i] + s * (c1[i] - c0[i]) + rel[i] - x0[k][i];
-        }
-    }
 }
 
 /// The factor of the update tried first at a double root ([`double_root`]).
@@ -239,10 +194,6 @@ impl Simulation {
                     first = false;
                     u.copy_from_slice(&self.sol.u);
                     self.model.loading.apply_prescribed(&mut u, t);
-                    // (the walls back where the step starts with it)
-                    if let Some(b) = self.barrier.as_mut() {
-                        b.alpha = if inc.dt > 0.0 { 0.0 } else { 1.0 };
-                    }
                     continue;
                 }
                 Err(e) => return Err(e),
@@ -320,48 +271,6 @@ impl Simulation {
                 u[d] = u_n[d] + self.sys.du[q];
             }
         }
-        Ok(())
-    }
-
-    /// The barrier's predictor: the last step's increment extrapolated over this one,
-    /// u_n + (dt / dt_{n−1}) (u_n − u_{n−1}) on the free dofs, the walls moving to the end of
-    /// the step with it, taken as far along that path as it is collision-free (CCD, the walls
-    /// with it). On entry `u` holds u_n on free dofs and the new prescribed values, the walls
-    /// where the step starts; on return `u` and the walls' progress are where the prediction
-    /// got to.
-    ///
-    /// Without it Newton moves a particle that a wall pushes only through the wall's linearised
-    /// motion, which the barrier's Hessian carries and which vanishes at the gap d̂ where such a
-    /// particle rests: the first updates were cut by the collision-free step to a quarter of
-    /// themselves while the wall closed in (robustness case 01, loose steps).
-    pub(super) fn barrier_predictor(&mut self, u: &mut [f64], dt: f64) -> Result<(), NewtonFailure> {
-        if self.run.dt_prev <= 0.0 || dt <= 0.0 || !self.barrier.as_ref().is_some_and(|b| b.predict) {
-            return Ok(());
-        }
-        let s = dt / self.run.dt_prev;
-        let mut u1 = u.to_vec();
-        for (d, &q) in self.sys.assembler.eq.iter().enumerate() {
-            if q != FIXED {
-                u1[d] += s * (self.sol.u[d] - self.u_prev[d]);
-            }
-        }
-        // a free particle's rigid motion is extrapolated exactly (a straight line through a
-        // turn of 0.25 rad stretched a loose disc by 3 %, which Newton then took back)
-        for b in &self.model.bodies {
-            let (lo, hi) = (b.node_offset, b.node_offset + b.mesh.nodes.len());
-            if hi > lo && (2 * lo..2 * hi).all(|d| self.sys.assembler.eq[d] != FIXED) {
-                let x0 = &self.model.x0[lo..hi];
-                extrapolate_turning(x0, &self.u_prev[2 * lo..2 * hi], &self.sol.u[2 * lo..2 * hi], s, &mut u1[2 * lo..2 * hi]);
-            }
-        }
-        let f = self.collision_free_fraction(u, &u1, 0.0, 1.0)?;
-        for (a, b) in u.iter_mut().zip(&u1) {
-            *a += f * (b - *a);
-        }
-        if let Some(b) = self.barrier.as_mut() {
-            b.alpha = wall_progress(0.0, f);
-        }
-        tracing::debug!(fraction = f, "barrier predictor");
         Ok(())
     }
 
@@ -779,7 +688,7 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use super::{barrier_descent, best_fit_turn, double_root, extrapolate_turning, quartered, turned_point, within_round_off, BarrierLine, BodyTurn};
+    use super::{barrier_descent, best_fit_turn, double_root, quartered, turned_point, within_round_off, BarrierLine, BodyTurn};
 
     /// Π(η) = ½ c (η − η*)² along a Newton update whose curvature is off (η* the true
     /// minimiser): −Π′(η) = c (η* − η), g0 = c η*. Closed form, exact to round-off.
@@ -961,43 +870,6 @@ dt = 0.1
         (trial.iterations, off, angle, phi)
     }
 
-    /// The predictor's extrapolation of one particle: a rigid motion at constant velocities (a
-    /// turn of 0.3 rad a step about its centroid, which moves on a straight line) is carried on
-    /// exactly, by any fraction s of a step, and a motion without a turn is the linear
-    /// extrapolation u + s (u − u_prev), to round-off.
-    #[test]
-    fn a_particle_is_extrapolated_along_its_turn() {
-        let (x0, _) = ring();
-        let n = x0.len();
-        let rigid = |t: f64, shift: [f64; 2]| -> Vec<f64> {
-            let (sa, ca) = t.sin_cos();
-            let o = [x0.iter().map(|p| p[0]).sum::<f64>() / n as f64, x0.iter().map(|p| p[1]).sum::<f64>() / n as f64];
-            (0..n).flat_map(|k| {
-                let r = [x0[k][0] - o[0], x0[k][1] - o[1]];
-                let p = [o[0] + ca * r[0] - sa * r[1] + t * shift[0], o[1] + sa * r[0] + ca * r[1] + t * shift[1]];
-                [p[0] - x0[k][0], p[1] - x0[k][1]]
-            }).collect()
-        };
-        let (u_prev, u) = (rigid(0.3, [2.0, -0.5]), rigid(0.6, [2.0, -0.5]));
-        for s in [1.0, 0.5, 1.5] {
-            let mut out = vec![0.0; 2 * n];
-            extrapolate_turning(&x0, &u_prev, &u, s, &mut out);
-            let want = rigid(0.6 + 0.3 * s, [2.0, -0.5]);
-            for d in 0..2 * n {
-                assert!((out[d] - want[d]).abs() < 1e-12, "s = {s}, dof {d}: {} against {}", out[d], want[d]);
-            }
-        }
-        // a stretch and a translation without a turn: the linear extrapolation
-        let u_prev: Vec<f64> = (0..2 * n).map(|d| 0.01 * x0[d / 2][d % 2] + 0.2).collect();
-        let u: Vec<f64> = (0..2 * n).map(|d| 0.03 * x0[d / 2][d % 2] + 0.5).collect();
-        let mut out = vec![0.0; 2 * n];
-        extrapolate_turning(&x0, &u_prev, &u, 0.7, &mut out);
-        for d in 0..2 * n {
-            let want = u[d] + 0.7 * (u[d] - u_prev[d]);
-            assert!((out[d] - want).abs() < 1e-12, "dof {d}: {} against {want}", out[d]);
-        }
-    }
-
     #[test]
     fn a_double_root_is_told_by_its_halving_updates_or_quartering_residuals() {
         // an update half the last along the same line, and a few percent off it
@@ -1014,7 +886,7 @@ dt = 0.1
     /// whose other walls are far: nothing holds it but the barrier, so it rests at the gap d̂
     /// from the wall, where the barrier's force is of order s² and its stiffness of order s
     /// (a double root). Returns the Newton iterations of the steps after the first contact.
-    fn push_a_loose_disc(predict: bool, double: bool) -> Vec<usize> {
+    fn push_a_loose_disc(double: bool) -> Vec<usize> {
         let text = r#"
 [[materials]]
 name = "m"
@@ -1047,8 +919,7 @@ dt_max = 0.1
         let c = crate::case::parse(text, std::path::Path::new(".")).unwrap();
         let model = crate::model::Model::from_case(&c).unwrap();
         let mut sim = crate::solver::Simulation::new(model, c.time.clone(), c.solver.clone()).unwrap();
-        let b = sim.barrier.as_mut().expect("the barrier is the default");
-        (b.predict, b.double) = (predict, double);
+        sim.barrier.as_mut().expect("the barrier is the default").double = double;
         let mut its = Vec::new();
         sim.run(&mut |_, r| its.push(r.newton_iterations)).unwrap();
         // (the wall reaches the disc in the first step; after it the disc is pushed)
@@ -1057,18 +928,15 @@ dt_max = 0.1
         its[2..].to_vec()
     }
 
-    /// Measured: 17 iterations a step plain (the error halving from the third on), 5 with the
-    /// double step, 0 with the predictor (it moves the disc on with the wall, onto the last
-    /// step's equilibrium again).
+    /// Measured: 17 iterations a step without the double step (the error halving from the
+    /// third on), 5 with it.
     #[test]
     fn a_pushed_loose_disc_takes_a_few_iterations() {
-        let plain = push_a_loose_disc(false, false);
-        let double = push_a_loose_disc(false, true);
-        let both = push_a_loose_disc(true, true);
-        eprintln!("iterations a step: {plain:?} plain, {double:?} with the double step, {both:?} with the predictor too");
+        let plain = push_a_loose_disc(false);
+        let double = push_a_loose_disc(true);
+        eprintln!("iterations a step: {plain:?} plain, {double:?} with the double step");
         assert!(plain.iter().all(|&k| k >= 12), "{plain:?}");
         assert!(double.iter().all(|&k| k <= 8), "{double:?}");
-        assert!(both.iter().all(|&k| k <= 2), "{both:?}");
     }
 
     #[test]

@@ -395,8 +395,9 @@ impl Simulation {
         let t = self.sol.time + dt;
         let inc = TimeIncrement { time: t, dt };
         self.prepare_contact(dt)?;
-        // prediction (with the barrier the last increment extrapolated as far as it is
-        // collision-free, the walls with it: `barrier_predictor`)
+        // prediction (none with the barrier: its Newton starts from the converged, collision-
+        // free configuration, and the line search moves the walls; an extrapolating predictor
+        // was measured and rejected, docs/robustness.md, twenty-seventh measurement)
         let mut u = self.sol.u.clone();
         let barrier = self.barrier.is_some();
         if self.run.dt_prev > 0.0 && !barrier {
@@ -410,9 +411,6 @@ impl Simulation {
         self.model.loading.apply_prescribed(&mut u, t);
         if let Some(dy) = self.dynamics.as_ref() {
             dy.predict(&mut u, dt, &self.sys.assembler.eq); // Newmark predictor (a_{n+1} = 0)
-        }
-        if barrier && self.dynamics.is_none() {
-            self.barrier_predictor(&mut u, dt)?;
         }
         if self.run.dt_prev == 0.0 && self.dynamics.is_none() && !barrier {
             // no increment to extrapolate (first step): linearised prediction instead
