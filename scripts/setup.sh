@@ -30,6 +30,9 @@ dpkg -s libpetsc-real-dev >/dev/null 2>&1 || need+=(libpetsc-real-dev)
 # default: its factorisations took 2.1 times as long, docs/scaling/README.md); the serial
 # build, so that MPI ranks do not start BLAS threads on each other's cores
 dpkg -s libopenblas0-serial >/dev/null 2>&1 || need+=(libopenblas0-serial)
+# CalculiX (ccx) for the peer benchmark against another solver (scripts/peer_bench.sh,
+# docs/peer.md) and its cross-check test tests/peer_calculix.rs
+command -v ccx >/dev/null 2>&1 || need+=(calculix-ccx)
 
 if ((${#need[@]})); then
   echo "setup: installing ${need[*]}"
