@@ -99,13 +99,18 @@ fn history_difference(reference: &Path, other: &Path, what: &str) -> f64 {
 
 /// [`history_difference`] with the columns `absolute` compared to [`VOLUME_TOL`] absolute.
 fn history_difference_but(reference: &Path, other: &Path, what: &str, absolute: &[&str]) -> f64 {
+    history_difference_except(reference, other, what, absolute, &[])
+}
+
+/// [`history_difference_but`] without the columns `skipped`.
+fn history_difference_except(reference: &Path, other: &Path, what: &str, absolute: &[&str], skipped: &[&str]) -> f64 {
     let (h0, r0) = read_csv(&reference.join("history.csv"));
     let (h1, r1) = read_csv(&other.join("history.csv"));
     assert_eq!(h0, h1, "{what}: columns");
     assert_eq!(r0.len(), r1.len(), "{what}: {} steps, the reference {}", r1.len(), r0.len());
     let mut worst = 0.0f64;
     for (c, name) in h0.iter().enumerate() {
-        if name == "residual" {
+        if name == "residual" || skipped.contains(&name.as_str()) {
             continue;
         }
         let a: Vec<f64> = r0.iter().map(|r| r[c]).collect();
@@ -281,7 +286,20 @@ fn parts_are_made_again_when_the_particles_move_out_of_their_ghosts() {
     let two = dir.join("two");
     run(&parts_case, Some(2), &two, &["--quiet"]);
     let remade = made_again_to_target(&two, "2 x 2");
-    let worst = history_difference(&serial, &two, "parts made again");
+    // (every column but the Newton iterations to 1e-8: these loose frictionless discs have a
+    // neutral vertical mode until they touch the fixed walls, along which the linear solver's
+    // round-off moves them by 1e-7 mm, and the iterations of one step depend on it — step 14:
+    // 19 with faer on one process, 15 with MUMPS on one, 14 on two, measured with the barrier's
+    // double step, 2026-12-07 — while the wall pressures agree to 1e-10. The iterations of the
+    // whole run must agree within 5 %.)
+    let worst = history_difference_except(&serial, &two, "parts made again", &[], &["newton_iterations"]);
+    let total = |out: &Path| {
+        let (head, rows) = read_csv(&out.join("history.csv"));
+        let c = head.iter().position(|h| h == "newton_iterations").expect("newton_iterations");
+        rows.iter().map(|r| r[c]).sum::<f64>()
+    };
+    let (its_serial, its_two) = (total(&serial), total(&two));
+    assert!((its_two - its_serial).abs() <= 0.05 * its_serial, "Newton iterations: {its_two} on parts, {its_serial} serial");
     println!("parts made again {remade} times on 2 ranks: history {worst:.2e} from the serial run");
 
     // 3 x 3 discs, the jam test from 0.5: made again at loaded steps, not jammed
