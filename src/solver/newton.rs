@@ -296,11 +296,10 @@ impl Simulation {
         let max_iterations = if self.barrier.as_ref().is_some_and(|b| b.descent) { super::barrier::DESCENT_ITERATIONS * self.spec.max_iterations } else { self.spec.max_iterations };
         // how many updates in a row the collision-free step has cut below half
         let mut limited = 0;
-        // the last update (equation numbering) when it was taken whole with the walls arrived,
-        // to tell a double root (see [`double_root`])
-        let mut last_whole: Option<Vec<f64>> = None;
-        // how many updates in a row were taken whole with the walls arrived
+        // how many updates in a row were taken whole with the walls arrived, and the last of
+        // them (equation numbering), to tell a double root (see [`double_root`])
         let mut whole = 0;
+        let mut last_whole: Vec<f64> = Vec::new();
         for k in 0..=max_iterations {
             // a stop asked for (a signal) abandons the step here, within one iteration
             self.check_interrupt()?;
@@ -368,7 +367,7 @@ impl Simulation {
             let r_true = self.barrier.is_some().then(|| self.sys.r.clone());
             self.add_wall_motion();
             self.solve_update()?;
-            let halved = last_whole.take().is_some_and(|prev| double_root(self.sys.dot(&self.sys.du, &self.sys.du), self.sys.dot(&self.sys.du, &prev), self.sys.dot(&prev, &prev)))
+            let halved = (whole >= 1 && double_root(self.sys.dot(&self.sys.du, &self.sys.du), self.sys.dot(&self.sys.du, &last_whole), self.sys.dot(&last_whole, &last_whole)))
                 || (whole >= 2 && quartered(&residuals));
             let energy = self.sys.dot(&self.sys.du, &self.sys.r).abs();
             // with the barrier: the slope of the incremental potential along the update is
@@ -516,7 +515,7 @@ impl Simulation {
                 }
             }
             if accepted && eta == 1.0 && alpha0 >= 1.0 && barrier {
-                last_whole = Some(self.sys.du.clone());
+                last_whole.clone_from(&self.sys.du);
                 whole += 1;
             } else {
                 whole = 0;
