@@ -10,6 +10,7 @@
 use mpfem::contact::barrier::point_edge_toi;
 use mpfem::contact::search::{
     boundary_of, brute_force_pairs, for_each_swept_pair, point_segment_distance, ContactSearch,
+    NearPairs,
 };
 use mpfem::contact::Segment;
 use mpfem::mesh::shapes;
@@ -248,6 +249,50 @@ fn random_scenes_never_miss_a_pair() {
     // The scenes must actually exercise contact: plenty of pairs within the distances.
     assert!(total_exact > 1000, "too few exact pairs: {total_exact}");
     assert!(total_broad >= total_exact);
+}
+
+/// The Verlet list answers exactly what a search after an update answers (the same pairs in
+/// the same order: the barrier's terms, hence a run's results, do not change with it), and
+/// answers from its list while the motion since it was made is small: on 12 random scenes,
+/// sequences of motions of 0.002–0.02 h (a Newton iteration's line search near convergence)
+/// with a jump of 2 h now and then (a new step), at d̂ = h/20 and at h.
+#[test]
+fn the_verlet_list_gives_the_searchs_pairs_and_reuses_them_while_little_moves() {
+    let mut rng = Rng::new(31);
+    let (mut builds, mut queries, mut pairs) = (0, 0, 0);
+    for scene_id in 0..12 {
+        let sc = random_scene(&mut rng);
+        for d in [sc.h / 20.0, sc.h] {
+            let mut search = ContactSearch::new(sc.segments.clone());
+            let mut reference = ContactSearch::new(sc.segments.clone());
+            let mut near = NearPairs::default();
+            let mut coords = sc.coords.clone();
+            for step in 0..30 {
+                let amp = if step % 10 == 9 { 2.0 } else { rng.range(0.002, 0.02) };
+                coords = deform(&mut rng, &coords, amp * sc.h);
+                let got = search.pairs_near(&mut near, &coords, &sc.slaves, d);
+                reference.update(&coords);
+                let want = reference.pairs(&coords, &sc.slaves, d);
+                assert_eq!(got, want, "scene {scene_id}, d = {d}, step {step}");
+                pairs += got.len();
+            }
+            // other slaves or another distance make the list again, and answer as the search
+            let half = &sc.slaves[..sc.slaves.len() / 2];
+            let before = near.builds;
+            let got = search.pairs_near(&mut near, &coords, half, d);
+            assert_eq!(got, reference.pairs(&coords, half, d), "scene {scene_id}: half the slaves");
+            let got = search.pairs_near(&mut near, &coords, half, 0.5 * d);
+            assert_eq!(got, reference.pairs(&coords, half, 0.5 * d), "scene {scene_id}: half the distance");
+            assert_eq!(near.builds, before + 2, "scene {scene_id}: new slaves or distance make the list again");
+            builds += near.builds;
+            queries += near.queries;
+        }
+    }
+    assert!(pairs > 10_000, "too few pairs to tell: {pairs}");
+    // three jumps of 2 h in each sequence must make it again; the small motions mostly not
+    // (the margin is at least d, a quarter of a segment: half of it allows 0.125 h of motion)
+    assert!(builds >= 24 * 5, "the list was made {builds} times in {queries} queries: a jump must make it again");
+    assert!(builds * 3 <= queries, "the list was made {builds} times in {queries} queries: small motions should reuse it");
 }
 
 /// Ours is tighter than the contract: the exact filter leaves only pairs within the round-off

@@ -65,7 +65,7 @@
 
 use super::barrier::{barrier_term, point_edge_region, point_edge_sq_distance, point_edge_toi, point_line, point_point, point_wall_sq_distance, point_wall_toi, projection_parameter, BarrierTerm, PointEdgeRegion, CCD_RESCALING};
 use super::geometry::{unit, Wall};
-use super::search::{for_each_swept_pair, ContactSearch};
+use super::search::{for_each_swept_pair, ContactSearch, NearPairs};
 use super::Segment;
 
 /// A node closer than d̂ to an edge of another particle.
@@ -376,6 +376,10 @@ pub struct BarrierContact {
     /// of them; empty: every body. And the boundary nodes of those bodies.
     first_sides: Vec<bool>,
     first_nodes: Vec<(usize, usize)>,
+    /// The Verlet lists of [`BarrierContact::evaluate`]'s two searches, the nodes' and the
+    /// edges' points' (see [`NearPairs`]).
+    near_nodes: NearPairs,
+    near_points: NearPairs,
 }
 
 /// Gauss–Legendre points on each boundary edge whose barrier terms carry the contact (see the
@@ -459,7 +463,7 @@ impl BarrierContact {
                 vertex_segments[v].push(i);
             }
         }
-        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments, node_reach: 1.0, quad_points: 0, quad_scale: Vec::new(), quad_x: Vec::new(), quad_slaves: Vec::new(), quad_virt: Vec::new(), first_sides: Vec::new(), first_nodes: Vec::new() }
+        Self { segments, nodes, search, dhat, kappa, wall_offset: 0.0, ties: Vec::new(), tied: Vec::new(), vertex_segments, node_reach: 1.0, quad_points: 0, quad_scale: Vec::new(), quad_x: Vec::new(), quad_slaves: Vec::new(), quad_virt: Vec::new(), first_sides: Vec::new(), first_nodes: Vec::new(), near_nodes: NearPairs::default(), near_points: NearPairs::default() }
     }
 
     /// Evaluate (and check for collisions, [`BarrierContact::collision_free_step`]) only the
@@ -496,13 +500,13 @@ impl BarrierContact {
         out.min_distance = f64::INFINITY;
         out.wall_force.clear();
         out.wall_force.resize(walls.len(), 0.0);
-        self.search.update(x);
         out.cancelled = 0;
         out.corners = 0;
         out.quads.clear();
         // the node terms: reach r d̂ and stiffness κ / r⁴ (the same barrier near contact)
         let (dn, kn) = (self.dhat * self.node_reach, self.kappa / self.node_reach.powi(4));
-        for (node, s) in self.search.pairs(x, self.first_nodes(), self.dhat) {
+        let first = if self.first_sides.is_empty() { &self.nodes } else { &self.first_nodes };
+        for (node, s) in self.search.pairs_near(&mut self.near_nodes, x, first, self.dhat) {
             let seg = self.segments[s];
             if self.is_tied(node, seg.body) {
                 continue;
@@ -531,7 +535,7 @@ impl BarrierContact {
                     xe.push([(1.0 - xi) * c[0] + xi * d[0], (1.0 - xi) * c[1] + xi * d[1]]);
                 }
             }
-            for (vi, s) in self.search.pairs(&xe, &slaves, self.dhat) {
+            for (vi, s) in self.search.pairs_near(&mut self.near_points, &xe, &slaves, self.dhat) {
                 let (e, j, xi, w) = virt[vi - n];
                 let [c, d] = self.segments[e].nodes;
                 if self.is_tied(c, self.segments[s].body) || self.is_tied(d, self.segments[s].body) {

@@ -227,6 +227,78 @@ impl ContactSearch {
         out.dedup();
         out
     }
+
+    /// [`ContactSearch::pairs`] after [`ContactSearch::update`] at `coords`, the same pairs in
+    /// the same order, answered from the Verlet list `near` while it holds (see [`NearPairs`])
+    /// and made again (with an update of the hierarchy) when it does not. The margin is the
+    /// larger of `distance` and a quarter of the mean segment length.
+    pub fn pairs_near(&mut self, near: &mut NearPairs, coords: &[[f64; 2]], slave_nodes: &[(usize, usize)], distance: f64) -> Vec<(usize, usize)> {
+        if distance.is_nan() || distance < 0.0 || self.segments.is_empty() || slave_nodes.is_empty() {
+            return Vec::new();
+        }
+        if !near.holds(coords, slave_nodes, distance) {
+            self.update(coords);
+            let mean_len = self.box_coords.iter().map(|e| (e[1][0] - e[0][0]).hypot(e[1][1] - e[0][1])).sum::<f64>() / self.box_coords.len() as f64;
+            let margin = distance.max(0.25 * mean_len);
+            near.candidates = self.pairs(coords, slave_nodes, distance + margin);
+            near.distance = distance;
+            near.margin = margin;
+            near.slaves.clear();
+            near.slaves.extend_from_slice(slave_nodes);
+            near.coords.clear();
+            near.coords.extend_from_slice(coords);
+            near.builds += 1;
+        }
+        near.queries += 1;
+        // the exact filter of `pairs` with the hierarchy's boxes at `coords` (no drift)
+        near.candidates
+            .iter()
+            .copied()
+            .filter(|&(node, s)| {
+                let p = coords[node];
+                let pad = ROUND_OFF * (1.0 + p[0].abs().max(p[1].abs()) + distance);
+                let seg = &self.segments[s];
+                point_segment_distance(p, coords[seg.nodes[0]], coords[seg.nodes[1]]) <= distance + pad
+            })
+            .collect()
+    }
+}
+
+/// A Verlet list over a [`ContactSearch`] ([`ContactSearch::pairs_near`]): the candidate pairs
+/// within `distance + margin` of the coordinates it was made at, which hold every pair within
+/// `distance` for as long as no point has moved by more than half the margin since (a
+/// point–segment distance changes by at most the point's displacement plus the largest of
+/// its segment ends'). A Newton iteration's line search and the iterations after it mostly
+/// move the boundary by much less than that, and a query then filters the list by the exact
+/// distance instead of searching the hierarchy for every slave again.
+#[derive(Debug, Default, Clone)]
+pub struct NearPairs {
+    distance: f64,
+    margin: f64,
+    slaves: Vec<(usize, usize)>,
+    coords: Vec<[f64; 2]>,
+    candidates: Vec<(usize, usize)>,
+    /// How many times the list was made, and how many queries it answered (statistics).
+    pub builds: usize,
+    pub queries: usize,
+}
+
+impl NearPairs {
+    /// Whether the list still holds every pair within `distance` of `coords` for these slaves.
+    fn holds(&self, coords: &[[f64; 2]], slave_nodes: &[(usize, usize)], distance: f64) -> bool {
+        if self.builds == 0 || distance != self.distance || coords.len() != self.coords.len() || slave_nodes != self.slaves.as_slice() {
+            return false;
+        }
+        let mut moved2: f64 = 0.0;
+        for (p, q) in coords.iter().zip(&self.coords) {
+            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+            moved2 = moved2.max(dx * dx + dy * dy);
+        }
+        // (twice the largest motion within 0.9 of the margin: the rest is far above the
+        // round-off pad of the exact filter)
+        let reach = 0.45 * self.margin;
+        moved2 <= reach * reach
+    }
 }
 
 /// The pad of a swept box, relative to its largest coordinate: far above the round-off of the
