@@ -881,12 +881,12 @@ impl Simulation {
         let Some(b) = self.barrier.as_ref() else { return };
         let sys = &mut self.sys;
         for e in &b.eval.edges {
-            let delta = projection_change::<6, 4>(&e.term.hess);
+            let delta = projection_change(&e.term.hess, crate::contact::barrier::project_psd_relative::<6, 4>);
             let i = b.pattern.binary_search(&(e.node, e.segment)).expect("the pattern holds every pair within d̂");
             sys.maps.pairs.add(&mut sys.kk.values, i, delta.as_flattened());
         }
         for q in &b.eval.quads {
-            let delta = projection_change::<8, 6>(&q.term.hess);
+            let delta = projection_change(&q.term.hess, |h| crate::contact::barrier::project_psd_point_on_edge(h, q.xi));
             let i = b.pattern.binary_search(&(b.contact.edge_key(q.edge), q.segment)).expect("the pattern holds every pair within d̂");
             sys.maps.pairs.add(&mut sys.kk.values, i, delta.as_flattened());
         }
@@ -1021,10 +1021,10 @@ impl Simulation {
     }
 }
 
-/// What projecting a pair's Hessian onto the PSD matrices adds to it: P(H) − H.
-fn projection_change<const N: usize, const M: usize>(hess: &[[f64; N]; N]) -> [[f64; N]; N] {
+/// What projecting a pair's Hessian onto the PSD matrices (by `project`) adds to it: P(H) − H.
+fn projection_change<const N: usize>(hess: &[[f64; N]; N], project: impl Fn(&mut [[f64; N]; N])) -> [[f64; N]; N] {
     let mut delta = *hess;
-    crate::contact::barrier::project_psd_relative::<N, M>(&mut delta);
+    project(&mut delta);
     for (row, h) in delta.iter_mut().zip(hess) {
         for (v, h) in row.iter_mut().zip(h) {
             *v -= h;
