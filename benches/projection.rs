@@ -6,6 +6,7 @@
 //! projected on its 6 relative directions (`project_psd_relative`) against its 4-wide range
 //! (`project_psd_point_on_edge`, what the solver does). Run: `cargo bench --bench projection`.
 use criterion::{criterion_group, criterion_main, Criterion};
+use mpfem::bench_support::edge_point_hessian;
 use mpfem::contact::barrier::{project_psd, project_psd_point_on_edge, project_psd_relative};
 use nalgebra::SMatrix;
 use std::hint::black_box;
@@ -69,16 +70,7 @@ fn bench(c: &mut Criterion) {
         .enumerate()
         .map(|(n, k)| {
             let xi = (n % 97) as f64 / 97.0;
-            let mut jm = [[0.0; 8]; 4];
-            for c in 0..2 {
-                jm[c][c] = 1.0 - xi;
-                jm[c][2 + c] = xi;
-                jm[c][4 + c] = -1.0;
-                jm[2 + c][4 + c] = -1.0;
-                jm[2 + c][6 + c] = 1.0;
-            }
-            let h = std::array::from_fn(|i| std::array::from_fn(|j| (0..4).map(|a| (0..4).map(|b| jm[a][i] * k[a][b] * jm[b][j]).sum::<f64>()).sum()));
-            (h, xi)
+            (edge_point_hessian(k, xi), xi)
         })
         .collect();
     let mut worst_range: f64 = 0.0;

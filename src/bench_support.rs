@@ -317,3 +317,20 @@ impl PairChange {
         self.kk.nnz()
     }
 }
+
+/// The Hessian Jᵀ K J of a pair whose first side is the point x = (1 − ξ) c + ξ d of an edge
+/// (c, d) and whose energy has the Hessian `k` in x − a and b − a (a, b the other edge): dofs
+/// `[c, d, a, b]`, each x then y, as the barrier's edge points have it (for the projection's
+/// benchmark and its unit test).
+pub fn edge_point_hessian(k: &[[f64; 4]; 4], xi: f64) -> [[f64; 8]; 8] {
+    // J: the rows (x − a) and (b − a) in each direction
+    let mut jm = [[0.0; 8]; 4];
+    for c in 0..2 {
+        jm[c][c] = 1.0 - xi;
+        jm[c][2 + c] = xi;
+        jm[c][4 + c] = -1.0;
+        jm[2 + c][4 + c] = -1.0;
+        jm[2 + c][6 + c] = 1.0;
+    }
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..4).map(|a| (0..4).map(|b| jm[a][i] * k[a][b] * jm[b][j]).sum::<f64>()).sum()))
+}

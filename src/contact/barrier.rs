@@ -540,21 +540,7 @@ mod tests {
                     k[j][i] = v;
                 }
             }
-            // J: rows (x − a)_c, (b − a)_c in the order [c, d, a, b] × 2 directions
-            let mut jm = [[0.0; 8]; 4];
-            for c in 0..2 {
-                jm[c][c] = 1.0 - xi;
-                jm[c][2 + c] = xi;
-                jm[c][4 + c] = -1.0;
-                jm[2 + c][4 + c] = -1.0;
-                jm[2 + c][6 + c] = 1.0;
-            }
-            let mut h = [[0.0; 8]; 8];
-            for i in 0..8 {
-                for j in 0..8 {
-                    h[i][j] = (0..4).map(|a| (0..4).map(|b| jm[a][i] * k[a][b] * jm[b][j]).sum::<f64>()).sum();
-                }
-            }
+            let h = crate::bench_support::edge_point_hessian(&k, xi);
             let (mut old, mut new) = (h, h);
             project_psd_relative::<8, 6>(&mut old);
             project_psd_point_on_edge(&mut new, xi);
