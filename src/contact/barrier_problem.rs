@@ -177,6 +177,12 @@ pub struct FrictionPair {
     /// node–edge pair, (edge key, segment · EDGE_POINTS + point) for a quadrature point's,
     /// (node, usize::MAX − wall) for a wall's.
     pub id: (usize, usize),
+    /// The point it follows from one lagging to the next, whatever segment of the other body
+    /// is nearest: (node, other body) for a node–edge pair, (edge key · EDGE_POINTS + point,
+    /// other body) for a quadrature point's, its `id` for a wall's. A point sliding over a
+    /// vertex moves its pair to the next segment; as the same point on the same body its
+    /// friction changes little ([`friction_residual`]).
+    pub follow: (usize, usize),
     /// The node whose status it sets (the point's nearer end for a quadrature point).
     pub node: usize,
     pub width: usize,
@@ -192,6 +198,59 @@ impl FrictionPair {
     pub fn term(&self, u: &[f64], u0: &[f64], eps: f64) -> super::barrier::BarrierTerm<8> {
         let dx: [f64; 8] = std::array::from_fn(|i| if i < self.width { u[self.dofs[i]] - u0[self.dofs[i]] } else { 0.0 });
         super::barrier::friction_term(&self.w, &dx, self.mu_lambda, eps)
+    }
+}
+
+/// The change of the lagged friction from `old` to `new` (the residual G(x) − x of its
+/// fixed-point iteration): for every followed point ([`FrictionPair::follow`]) of either, the
+/// sum of its pairs' μλ in `new` less that in `old`; sorted by the point.
+pub fn friction_residual(old: &[FrictionPair], new: &[FrictionPair]) -> Vec<((usize, usize), f64)> {
+    let mut all: Vec<((usize, usize), f64)> = new.iter().map(|f| (f.follow, f.mu_lambda)).chain(old.iter().map(|f| (f.follow, -f.mu_lambda))).collect();
+    all.sort_by(|a, b| a.0.cmp(&b.0));
+    let mut out: Vec<((usize, usize), f64)> = Vec::with_capacity(all.len());
+    for (k, v) in all {
+        match out.last_mut() {
+            Some(last) if last.0 == k => last.1 += v,
+            _ => out.push((k, v)),
+        }
+    }
+    out
+}
+
+/// Where the lagging of the friction stands after a converged solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lagging {
+    /// No point's μλ changed by more than the tolerance: the step is done.
+    Converged,
+    /// The lagging came back to the friction of two solves before: it alternates between two
+    /// states, and more solves would not end it.
+    Cycle,
+    /// Solve again with the friction lagged at the last solution.
+    Again,
+}
+
+/// The largest changes of the lagging after a solve, on this process's pairs: of the friction
+/// lagged at its solution, `next`, from the one the solve used, `now`, and from the one the
+/// solve before it used, `before` (infinite without), and the largest μλ of `now` and `next`
+/// (N/mm): `[change, back, scale]`, for [`lagging`] once each is the largest over the processes.
+pub fn lag_changes(before: Option<&[FrictionPair]>, now: &[FrictionPair], next: &[FrictionPair]) -> [f64; 3] {
+    let largest = |r: Vec<((usize, usize), f64)>| r.iter().fold(0.0, |m: f64, e| m.max(e.1.abs()));
+    let change = largest(friction_residual(now, next));
+    let back = before.map_or(f64::INFINITY, |b| largest(friction_residual(b, next)));
+    let scale = next.iter().chain(now).fold(0.0, |m: f64, f| m.max(f.mu_lambda));
+    [change, back, scale]
+}
+
+/// The lagging's state from [`lag_changes`] and the tolerance `tol` relative to the largest
+/// μλ: converged when the change is within it, a cycle when the way back to two solves before
+/// is.
+pub fn lagging([change, back, scale]: [f64; 3], tol: f64) -> Lagging {
+    if change <= tol * scale {
+        Lagging::Converged
+    } else if back <= tol * scale {
+        Lagging::Cycle
+    } else {
+        Lagging::Again
     }
 }
 
@@ -296,7 +355,8 @@ impl BarrierEval {
                 w[..6].copy_from_slice(&[t[0], t[1], wa * t[0], wa * t[1], wb * t[0], wb * t[1]]);
                 let mut dofs = [0; 8];
                 dofs[..6].copy_from_slice(&e.dofs);
-                out.push(FrictionPair { block: Some((e.node, e.segment)), id: (e.node, e.segment), node: e.node, width: 6, dofs, w, mu_lambda: mu * lambda });
+                let follow = (e.node, contact.segments[e.segment].body);
+                out.push(FrictionPair { block: Some((e.node, e.segment)), id: (e.node, e.segment), follow, node: e.node, width: 6, dofs, w, mu_lambda: mu * lambda });
             }
             for q in &self.quads {
                 let g = q.point_gradient();
@@ -309,7 +369,8 @@ impl BarrierEval {
                 let w = [mc * t[0], mc * t[1], md * t[0], md * t[1], wa * t[0], wa * t[1], wb * t[0], wb * t[1]];
                 let key = contact.edge_key(q.edge);
                 let node = if q.xi < 0.5 { c } else { d };
-                out.push(FrictionPair { block: Some((key, q.segment)), id: (key, q.segment * EDGE_POINTS.max(1) + q.point), node, width: 8, dofs: q.dofs, w, mu_lambda: mu * lambda });
+                let follow = (key * EDGE_POINTS.max(1) + q.point, contact.segments[q.segment].body);
+                out.push(FrictionPair { block: Some((key, q.segment)), id: (key, q.segment * EDGE_POINTS.max(1) + q.point), follow, node, width: 8, dofs: q.dofs, w, mu_lambda: mu * lambda });
             }
         }
         for wt in &self.walls {
@@ -321,7 +382,7 @@ impl BarrierEval {
             let lambda = wt.term.grad[0].hypot(wt.term.grad[1]);
             let w = [-n[1], n[0], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
             let dofs = [2 * wt.node, 2 * wt.node + 1, 0, 0, 0, 0, 0, 0];
-            out.push(FrictionPair { block: None, id: (wt.node, usize::MAX - wt.wall), node: wt.node, width: 2, dofs, w, mu_lambda: m * lambda });
+            out.push(FrictionPair { block: None, id: (wt.node, usize::MAX - wt.wall), follow: (wt.node, usize::MAX - wt.wall), node: wt.node, width: 2, dofs, w, mu_lambda: m * lambda });
         }
         out
     }
@@ -1032,6 +1093,69 @@ mod tests {
             }
         }
         eval
+    }
+
+    /// A node sliding along a flat side over one of its vertices: its barrier pair moves from
+    /// one segment to the next, and its lagged friction follows it as one point. The
+    /// friction's change between the two sides is the change of μλ (continuous: below 1e-6 of
+    /// it for a slide of 2e-6 d̂), not the whole μλ once gone and once new, as comparing the
+    /// pairs would have it; a node that leaves every barrier's reach changes by all of its μλ.
+    #[test]
+    fn lagged_friction_follows_a_point_over_a_vertex() {
+        let dhat = 0.1;
+        // body 1: a flat side of two segments meeting at node 2 = (0, 0); node 0 on body 0
+        let segments = vec![Segment { nodes: [1, 2], body: 1 }, Segment { nodes: [2, 3], body: 1 }];
+        let mut c = BarrierContact::new(segments, vec![(0, 0), (1, 1), (2, 1), (3, 1)], dhat, 1.0e3);
+        let lagged = |c: &mut BarrierContact, p: [f64; 2]| {
+            let x = vec![p, [-1.0, 0.0], [0.0, 0.0], [1.0, 0.0]];
+            let mut eval = BarrierEval::default();
+            c.evaluate(&x, &[], true, &mut eval).expect("no contact");
+            eval.friction_pairs(c, &x, &[], 0.3, &[])
+        };
+        let left = lagged(&mut c, [-1e-6 * dhat, 0.5 * dhat]);
+        let right = lagged(&mut c, [1e-6 * dhat, 0.5 * dhat]);
+        assert_eq!((left.len(), right.len()), (1, 1), "one pair a side: {left:?} {right:?}");
+        assert_ne!(left[0].id, right[0].id, "the pair moved to the other segment");
+        assert_eq!(left[0].follow, (0, 1));
+        assert_eq!(left[0].follow, right[0].follow);
+        let mu_lambda = left[0].mu_lambda;
+        assert!(mu_lambda > 0.0);
+        let r = friction_residual(&left, &right);
+        assert_eq!(r.len(), 1);
+        assert!(r[0].1.abs() <= 1e-6 * mu_lambda, "change {} of μλ {mu_lambda}", r[0].1);
+        // beyond d̂: no pair, the point's friction all gone
+        let gone = lagged(&mut c, [0.3, 2.0 * dhat]);
+        assert!(gone.is_empty());
+        let r = friction_residual(&left, &gone);
+        assert_eq!(r, vec![((0, 1), -mu_lambda)]);
+    }
+
+    /// The lagging of a point whose friction alternates between two states (a, b, a: μλ 2 and
+    /// 3 N/mm on two segments of one body) is a cycle at the third solve, and only there; one
+    /// that contracts (2, 2.5, 2.75, … towards 3) is never one, and converged once a change is
+    /// within the tolerance of the largest μλ (1e-4 · 3 N/mm: the k-th solve's change is 2⁻ᵏ,
+    /// 4.9e-4 at the eleventh, 2.4e-4 at the twelfth).
+    #[test]
+    fn lagging_sees_a_cycle_and_a_contraction() {
+        let pair = |segment: usize, mu_lambda: f64| FrictionPair { block: Some((0, segment)), id: (0, segment), follow: (0, 1), node: 0, width: 6, dofs: [0, 1, 2, 3, 4, 5, 0, 0], w: [1.0, 0.0, -0.5, 0.0, -0.5, 0.0, 0.0, 0.0], mu_lambda };
+        let (a, b) = (vec![pair(0, 2.0)], vec![pair(1, 3.0)]);
+        assert_eq!(lagging(lag_changes(None, &a, &b), 1e-4), Lagging::Again);
+        assert_eq!(lagging(lag_changes(Some(&a), &b, &a), 1e-4), Lagging::Cycle);
+        assert_eq!(lagging(lag_changes(Some(&b), &a, &a), 1e-4), Lagging::Converged);
+        // a contraction: x ← (x + 3) / 2 from 2
+        let mut states = vec![vec![pair(0, 2.0)]];
+        let mut end = None;
+        for k in 1..30 {
+            let next = vec![pair(k % 2, 0.5 * (states[k - 1][0].mu_lambda + 3.0))];
+            let state = lagging(lag_changes(if k >= 2 { Some(&states[k - 2]) } else { None }, &states[k - 1], &next), 1e-4);
+            assert_ne!(state, Lagging::Cycle, "solve {k}");
+            states.push(next);
+            if state == Lagging::Converged {
+                end = Some(k);
+                break;
+            }
+        }
+        assert_eq!(end, Some(12));
     }
 
     /// Gauss–Legendre with n points on [0, 1] integrates x^k exactly to 1 / (k + 1) up to

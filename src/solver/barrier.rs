@@ -25,7 +25,7 @@
 use super::state::BarrierState;
 use super::{NewtonFailure, Phase, Simulation};
 use crate::assembly::FIXED;
-use crate::contact::barrier_problem::{BarrierContact, BarrierEval, FrictionPair};
+use crate::contact::barrier_problem::{lag_changes, lagging, BarrierContact, BarrierEval, FrictionPair, Lagging};
 use crate::contact::geometry::unit;
 use crate::contact::{ContactStats, NodalContact, Wall};
 
@@ -84,6 +84,9 @@ pub(super) struct BarrierRun {
     /// The lagged friction of the pairs (frozen normal forces and tangents, updated after
     /// each converged solve until they stop changing).
     pub friction: Vec<FrictionPair>,
+    /// The lagged friction before the last update of this step's (empty before its second):
+    /// an update back to it is a cycle ([`Simulation::update_barrier_friction`]).
+    pub friction_before: Vec<FrictionPair>,
     /// Cohering particles: a node within d̂ of another particle at the end of a step (or at
     /// the start) is tied to it ([`crate::contact::barrier_problem::Tie`]), with this stiffness
     /// (N/mm; 0 without ties).
@@ -169,7 +172,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true, double: true }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), friction_before: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true, double: true }
     }
 
     /// The round-off of the ties' forces, after ties were made: `n_ties` of them in the whole
@@ -530,42 +533,47 @@ impl Simulation {
     }
 
     /// After a converged solve with friction: the friction lagged again at the converged
-    /// configuration `u`; true (solve again) when a pair's μλ changed by more than
-    /// [`FRICTION_TOL`] of the largest, or a pair came or went, and fewer than
-    /// [`MAX_FRICTION_UPDATES`] updates were made.
+    /// configuration `u`; true (solve again) when a followed point's μλ changed by more than
+    /// [`FRICTION_TOL`] of the largest
+    /// ([`crate::contact::barrier_problem::friction_residual`]), the update does not go back
+    /// to the friction of two solves ago, and fewer than [`MAX_FRICTION_UPDATES`] updates were
+    /// made (`updates`: 0 at the first after the step's first solve).
+    ///
+    /// The lagging is a fixed-point iteration on μλ. Where friction carries more of a load
+    /// than the normal force that limits it, the iteration multiplies the error by less than
+    /// −1, or a point slides to and fro over a vertex between two solves; then it alternates
+    /// between two states for good (robustness case 06: the same two for 14 updates, twice;
+    /// case 11 four times). Such a cycle is seen as the lagging coming back to where it was two
+    /// solves before, to within [`FRICTION_TOL`]: the step keeps its last solve.
     pub(super) fn update_barrier_friction(&mut self, u: &[f64], updates: usize) -> bool {
         if !self.barrier.as_ref().is_some_and(|b| b.has_friction()) {
             return false;
         }
         let x = self.coords(u);
         let Some(b) = self.barrier.as_mut() else { return false };
+        if updates == 0 {
+            b.friction_before.clear();
+        }
         let walls = b.walls_at(b.alpha);
         let new = b.eval.friction_pairs(&b.contact, &x, &walls, b.mu, &b.mu_walls);
-        let key = |f: &FrictionPair| f.id;
-        let mut old: Vec<((usize, usize), f64)> = b.friction.iter().map(|f| (key(f), f.mu_lambda)).collect();
-        old.sort_by(|a, c| a.0.cmp(&c.0));
-        let scale = new.iter().chain(&b.friction).map(|f| f.mu_lambda).fold(0.0, f64::max);
-        let mut change: f64 = 0.0;
-        for f in &new {
-            let before = old.binary_search_by(|o| o.0.cmp(&key(f))).map_or(0.0, |i| old[i].1);
-            change = change.max((f.mu_lambda - before).abs());
-        }
-        for (k, v) in &old {
-            if !new.iter().any(|f| key(f) == *k) {
-                change = change.max(*v);
+        let before = (!b.friction_before.is_empty()).then_some(&b.friction_before[..]);
+        let changes = lag_changes(before, &b.friction, &new).map(|v| self.sys.max(v));
+        let relative = changes[0] / changes[2].max(f64::MIN_POSITIVE);
+        match lagging(changes, FRICTION_TOL) {
+            Lagging::Converged => return false,
+            Lagging::Cycle => {
+                tracing::debug!(change = relative, updates, "lagged friction alternates between two states: the last solve stays");
+                return false;
             }
+            Lagging::Again if updates >= MAX_FRICTION_UPDATES => {
+                tracing::warn!(change = relative, "lagged friction not converged after the allowed updates");
+                return false;
+            }
+            Lagging::Again => tracing::debug!(change = relative, "lagged friction updated"),
         }
-        let (change, scale) = (self.sys.max(change), self.sys.max(scale));
         let Some(b) = self.barrier.as_mut() else { return false };
-        let again = change > FRICTION_TOL * scale;
-        if again && updates >= MAX_FRICTION_UPDATES {
-            tracing::warn!(change = change / scale.max(f64::MIN_POSITIVE), "lagged friction not converged after the allowed updates");
-            return false;
-        }
-        if again {
-            b.friction = new;
-        }
-        again
+        b.friction_before = std::mem::replace(&mut b.friction, new);
+        true
     }
 
     /// After a converged solve with ties: Uzawa's update of their multipliers, λ ← λ + k g;
