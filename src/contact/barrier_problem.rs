@@ -919,15 +919,18 @@ impl BarrierContact {
     /// walls from `walls0` to `walls1`, moving along their normals) that keeps every boundary
     /// node off every edge of another particle and in front of every wall, with IPC's
     /// conservative rescaling: [`CCD_RESCALING`] × the first time of impact, 1 when nothing
-    /// meets. The broad phase is conservative: a node and an edge can meet only if the boxes
-    /// they sweep overlap ([`for_each_swept_pair`]).
+    /// meets. The broad phase is conservative: the barrier's Verlet list of its nodes where
+    /// the motion is small enough for it to hold every pair that can meet
+    /// ([`super::search::NearPairs::sweep_candidates`]: most updates near convergence), else
+    /// the pairs whose swept boxes overlap ([`for_each_swept_pair`]). The first impact is the
+    /// same either way; the list spares building the boxes' hierarchy for each update.
     pub fn collision_free_step(&self, x0: &[[f64; 2]], x1: &[[f64; 2]], walls0: &[Wall], walls1: &[Wall]) -> f64 {
         let moves = self.nodes.iter().any(|&(n, _)| x1[n] != x0[n]);
         let first = self.first_nodes();
         let mut toi: f64 = f64::INFINITY;
         if moves {
             let segments = &self.segments;
-            for_each_swept_pair(segments, x0, x1, first, |node, s| {
+            let mut check = |node: usize, s: usize| {
                 let seg = segments[s];
                 if self.is_tied(node, seg.body) {
                     return;
@@ -936,7 +939,13 @@ impl BarrierContact {
                 if let Some(t) = point_edge_toi([x0[node], x0[a], x0[b]], [x1[node], x1[a], x1[b]]) {
                     toi = toi.min(t);
                 }
-            });
+            };
+            // the barrier's Verlet list of its nodes where it holds every pair that can meet
+            // (a small update), else the swept boxes: the same first impact either way
+            match self.near_nodes.sweep_candidates(x0, x1, first) {
+                Some(pairs) => pairs.iter().for_each(|&(node, s)| check(node, s)),
+                None => for_each_swept_pair(segments, x0, x1, first, check),
+            }
         }
         for (w0, w1) in walls0.iter().zip(walls1) {
             let n = unit(w0.normal);

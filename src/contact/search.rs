@@ -299,6 +299,25 @@ impl NearPairs {
         let reach = 0.45 * self.margin;
         moved2 <= reach * reach
     }
+
+    /// The candidates of a straight motion of every point from `x0` to `x1` for these slaves,
+    /// when the list holds them all: every node and segment that meet on the way are in it
+    /// while no point's two positions are farther than 0.45 of `distance + margin` from where
+    /// the list was made (a pair that meets at some time was then at most twice that apart,
+    /// each point on its way being no farther from there than the farther of its two
+    /// positions). `None` otherwise (a search of the swept boxes is needed).
+    pub fn sweep_candidates(&self, x0: &[[f64; 2]], x1: &[[f64; 2]], slave_nodes: &[(usize, usize)]) -> Option<&[(usize, usize)]> {
+        if self.builds == 0 || x0.len() != self.coords.len() || x1.len() != self.coords.len() || slave_nodes != self.slaves.as_slice() {
+            return None;
+        }
+        let reach = 0.45 * (self.distance + self.margin);
+        let r2 = reach * reach;
+        let far = |x: &[[f64; 2]]| x.iter().zip(&self.coords).any(|(p, q)| (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) > r2);
+        if far(x0) || far(x1) {
+            return None;
+        }
+        Some(&self.candidates)
+    }
 }
 
 /// The pad of a swept box, relative to its largest coordinate: far above the round-off of the
