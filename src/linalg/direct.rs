@@ -660,7 +660,7 @@ impl Factorisation for CholeskyFactors {
     fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError> {
         let n = a.nrows;
         let symbolic = symbolic_cholesky(a, self.ordering, structure)?;
-        tracing::debug!(n, nnz = a.nnz(), factor = symbolic.len_val(), "Cholesky analysed");
+        tracing::debug!(n, nnz = a.nnz(), factor = symbolic.len_val(), supernodal = matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)), "Cholesky analysed");
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
