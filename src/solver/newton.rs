@@ -102,7 +102,7 @@ fn quartered(residuals: &[f64]) -> bool {
 /// How far through the step the walls are at a step η of a Newton update that started with
 /// them at `alpha0` (they move with the update the same fraction of the rest of their way),
 /// snapped to 1 (arrived) within round-off.
-fn wall_progress(alpha0: f64, eta: f64) -> f64 {
+pub(super) fn wall_progress(alpha0: f64, eta: f64) -> f64 {
     let a = alpha0 + eta * (1.0 - alpha0);
     if a >= 1.0 - 1e-12 {
         1.0
@@ -194,6 +194,10 @@ impl Simulation {
                     first = false;
                     u.copy_from_slice(&self.sol.u);
                     self.model.loading.apply_prescribed(&mut u, t);
+                    // (the walls back where the step starts, as the prediction found them)
+                    if let Some(b) = self.barrier.as_mut() {
+                        b.alpha = if inc.dt > 0.0 { 0.0 } else { 1.0 };
+                    }
                     continue;
                 }
                 Err(e) => return Err(e),
