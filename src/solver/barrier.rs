@@ -87,6 +87,9 @@ pub(super) struct BarrierRun {
     /// The lagged friction before the last update of this step's (empty before its second):
     /// an update back to it is a cycle ([`Simulation::update_barrier_friction`]).
     pub friction_before: Vec<FrictionPair>,
+    /// Start each step with the particles carried by the walls' box
+    /// ([`Simulation::box_prediction`]; on by default, off for tests of what follows it).
+    pub predict: bool,
     /// Cohering particles: a node within d̂ of another particle at the end of a step (or at
     /// the start) is tied to it ([`crate::contact::barrier_problem::Tie`]), with this stiffness
     /// (N/mm; 0 without ties).
@@ -172,7 +175,7 @@ impl BarrierRun {
     pub fn new(contact: BarrierContact, h_min: f64, mu: f64, mu_walls: Vec<f64>, tie_stiffness: f64) -> Self {
         let node_dofs = contact.nodes.iter().map(|&(n, _)| vec![2 * n, 2 * n + 1]).collect();
         let kappa0 = contact.kappa;
-        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), friction_before: Vec::new(), tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true, double: true }
+        Self { contact, eval: BarrierEval::default(), pattern: Vec::new(), node_dofs, walls0: Vec::new(), walls1: Vec::new(), alpha: 1.0, min_distance: f64::INFINITY, kappa0, h_min, mu, mu_walls, friction: Vec::new(), friction_before: Vec::new(), predict: true, tie_stiffness, extent: 0.0, tie_floor: 0.0, tie_gap: f64::INFINITY, n_ties: 0, stiffness_floor: 0.0, load_floor: 0.0, nodal: NodalContact::default(), descent: false, shift: 0.0, definite: false, turn: true, double: true }
     }
 
     /// The round-off of the ties' forces, after ties were made: `n_ties` of them in the whole

@@ -650,6 +650,15 @@ impl Simulation {
         }
     }
 
+    /// Switch the barrier's box prediction of each step off or on (on by default; nothing to
+    /// switch without the barrier). For tests and benchmarks that measure what Newton does
+    /// from the last converged state; no case key reaches it.
+    pub fn set_barrier_box_prediction(&mut self, on: bool) {
+        if let Some(b) = self.barrier.as_mut() {
+            b.predict = on;
+        }
+    }
+
     /// The step counter (converged steps so far).
     pub fn step(&self) -> usize {
         self.run.step
