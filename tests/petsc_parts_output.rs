@@ -204,6 +204,16 @@ fn stopped_at(from: &Path, to: &Path, step: usize) {
     std::fs::write(to.join("history.csv"), kept.join("\n") + "\n").unwrap();
 }
 
+/// The step of the last checkpoint of the run in `out`, made every `every` steps: asserts that
+/// the run went on after it (a run that ends on a checkpoint leaves nothing to continue, and
+/// its step count moves with the solver's paths: choose another `checkpoint_every` then).
+fn last_checkpoint(out: &Path, every: usize) -> usize {
+    let steps = std::fs::read_to_string(out.join("history.csv")).unwrap().lines().count() - 1;
+    let k = steps / every * every;
+    assert!(k >= 1 && k < steps, "the run in {} has {steps} steps: its last checkpoint (every {every}) is at its end or missing", out.display());
+    k
+}
+
 /// The checkpoint of the run in `from` (written at `step`, its last) continued in `to` with
 /// `case` on `ranks` ranks (serially with None), with `--allow-case-change` when `changed`
 /// (a checkpoint written with another case).
@@ -234,7 +244,7 @@ fn serial_and_parts(dir: &Path, edit: impl Fn(String) -> String, made: &[&str]) 
 fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
     let dir = tmpdir("parts");
     // (with probes in discs of both ranks, a point and a node, and a displacement group)
-    let output = "[output]\nevery = 2\ncheckpoint_every = 4\ncheckpoint_minutes = 0\nprobes = [{ name = \"q\", point = [83.0, 84.0] }, { name = \"n\", body = \"g0_p0\", node = 2 }]\ndisplacements = [\"g0_p4.boundary\"]";
+    let output = "[output]\nevery = 2\ncheckpoint_every = 3\ncheckpoint_minutes = 0\nprobes = [{ name = \"q\", point = [83.0, 84.0] }, { name = \"n\", body = \"g0_p0\", node = 2 }]\ndisplacements = [\"g0_p4.boundary\"]";
     let (serial_case, parts_case) = serial_and_parts(&dir, |t| t.replace("[output]\nevery = 0", output), &["every = 2", "probes", "g0_p4.boundary"]);
 
     let serial = dir.join("serial");
@@ -250,14 +260,14 @@ fn parts_write_the_serial_results_and_restart_on_other_rank_counts() {
     let probes = probes_difference(&serial, &two);
     println!("parts on 2 ranks: history {worst:.2e}, results.h5 {results:.2e} over {n} datasets, probes.csv {probes:.2e}, from the serial faer run");
 
-    // the 2-rank checkpoint (step 4) on 3 ranks
+    // the 2-rank checkpoint (its last, every 3 steps) on 3 ranks
     let three = dir.join("three");
-    restarted(&two, 4, &three, &parts_case, Some(3), false);
+    restarted(&two, last_checkpoint(&two, 3), &three, &parts_case, Some(3), false);
     let worst = history_difference(&serial, &three, "2 ranks' checkpoint on 3");
     println!("the 2-rank checkpoint continued on 3 ranks: {worst:.2e} from the serial run");
-    // the serial run's checkpoint (step 4, the whole model) on 2 ranks' parts
+    // the serial run's last checkpoint (the whole model) on 2 ranks' parts
     let from_serial = dir.join("from-serial");
-    restarted(&serial, 4, &from_serial, &parts_case, Some(2), true);
+    restarted(&serial, last_checkpoint(&serial, 3), &from_serial, &parts_case, Some(2), true);
     let worst = history_difference(&serial, &from_serial, "the serial checkpoint on 2 ranks");
     println!("the serial checkpoint continued on 2 ranks: {worst:.2e} from the serial run");
     let _ = std::fs::remove_dir_all(&dir);

@@ -943,9 +943,9 @@ dt_max = 0.1
 
     /// A loose disc (R = 5 mm) at (30, 60) in a 100 × 100 mm die whose left and top walls move
     /// in at 10 mm/s: each 0.1 s step the box prediction carries its centre to the affine image
-    /// of the box, x' = l₁ + (x − l₀)(h₁ − l₁)/(h₀ − l₀) on each axis (to 1e-9 mm: the
-    /// centroid of its nodes, each translated by the same amount), and Newton has nothing
-    /// left to do but let the walls arrive (at most one update a step). Without the
+    /// of the box, x' = l₁ + (x − l₀)(h₁ − l₁)/(h₀ − l₀) on each axis (to 1e-9 mm: the middle
+    /// of its nodes' bounding box, each node translated by the same amount), and Newton has
+    /// nothing left to do but let the walls arrive (at most one update a step). Without the
     /// prediction it stays where it is.
     #[test]
     fn a_loose_disc_is_carried_with_the_box() {
@@ -986,9 +986,14 @@ dt_max = 0.1
             sim.set_barrier_box_prediction(predict);
             let mut its = Vec::new();
             sim.run(&mut |_, r| its.push(r.newton_iterations)).unwrap();
-            let n = sim.model.x0.len() as f64;
-            let c: [f64; 2] = std::array::from_fn(|a| sim.model.x0.iter().enumerate().map(|(k, p)| p[a] + sim.sol.u[2 * k + a]).sum::<f64>() / n);
-            let c0: [f64; 2] = std::array::from_fn(|a| sim.model.x0.iter().map(|p| p[a]).sum::<f64>() / n);
+            let mid = |y: &dyn Fn(usize) -> [f64; 2]| -> [f64; 2] {
+                std::array::from_fn(|a| {
+                    let v: Vec<f64> = (0..sim.model.x0.len()).map(|k| y(k)[a]).collect();
+                    0.5 * (v.iter().copied().fold(f64::INFINITY, f64::min) + v.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+                })
+            };
+            let c = mid(&|k| [sim.model.x0[k][0] + sim.sol.u[2 * k], sim.model.x0[k][1] + sim.sol.u[2 * k + 1]]);
+            let c0 = mid(&|k| sim.model.x0[k]);
             (c, c0, its)
         };
         let (c, c0, its) = centre(true);

@@ -394,7 +394,8 @@ impl Simulation {
     /// the step starts). Along an axis with a wall on each side (normals within 2.6° of it), a
     /// centroid at c goes to l₁ + (c − l₀)(h₁ − l₁)/(h₀ − l₀), l and h the two walls at the
     /// start (0) and the end (1) of the step; along any other axis it stays. On `u` (every dof,
-    /// the step's start); the walls then move with Newton's line search as before.
+    /// the step's start; c is the middle of the particle's bounding box); the walls then move
+    /// with Newton's line search as before.
     ///
     /// A particle that nothing touches is in equilibrium wherever it is; Newton left it where
     /// it was, and each update of a packing then aimed its particles through gaps the tangent
@@ -432,21 +433,23 @@ impl Simulation {
         if maps.iter().all(|m| m.is_none_or(|(l0, l1, s)| l0 == l1 && s == 1.0)) {
             return Ok(());
         }
-        // each particle's centroid (its nodes' mean) and its translation
+        // each particle's centre (the middle of its nodes' bounding box: the same on every
+        // process of a part, whatever order its nodes are numbered in) and its translation
         let x = self.coords(u);
         let body = &self.springs.node_body;
-        let mut sums = vec![[0.0f64; 3]; self.model.bodies.len()];
+        let mut boxes = vec![[f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY]; self.model.bodies.len()];
         for (n, p) in x.iter().enumerate() {
-            let s = &mut sums[body[n]];
-            s[0] += p[0];
-            s[1] += p[1];
-            s[2] += 1.0;
+            let b = &mut boxes[body[n]];
+            b[0] = b[0].min(p[0]);
+            b[1] = b[1].min(p[1]);
+            b[2] = b[2].max(p[0]);
+            b[3] = b[3].max(p[1]);
         }
-        let shift: Vec<[f64; 2]> = sums
+        let shift: Vec<[f64; 2]> = boxes
             .iter()
-            .map(|s| {
-                let c = [s[0] / s[2].max(1.0), s[1] / s[2].max(1.0)];
-                std::array::from_fn(|a| maps[a].map_or(0.0, |(l0, l1, stretch)| l1 + (c[a] - l0) * stretch - c[a]))
+            .map(|b| {
+                let c = [0.5 * (b[0] + b[2]), 0.5 * (b[1] + b[3])];
+                std::array::from_fn(|a| if c[a].is_finite() { maps[a].map_or(0.0, |(l0, l1, stretch)| l1 + (c[a] - l0) * stretch - c[a]) } else { 0.0 })
             })
             .collect();
         let u0 = u.to_vec();
