@@ -389,13 +389,13 @@ impl Simulation {
         Ok(())
     }
 
-    /// The barrier's prediction of a step: every particle translated with the box its walls
-    /// make, as far as the motion is collision-free (IPC's conservative CCD, the walls where
-    /// the step starts). Along an axis with a wall on each side (normals within 2.6° of it), a
-    /// centroid at c goes to l₁ + (c − l₀)(h₁ − l₁)/(h₀ − l₀), l and h the two walls at the
-    /// start (0) and the end (1) of the step; along any other axis it stays. On `u` (every dof,
-    /// the step's start; c is the middle of the particle's bounding box); the walls then move
-    /// with Newton's line search as before.
+    /// The barrier's prediction of the step from `t0` to `t1`: every particle translated with
+    /// the box its walls make, as far as the motion is collision-free (IPC's conservative CCD,
+    /// the walls where the step starts). Along an axis with a wall on each side, a particle's
+    /// centre c (the middle of its bounding box) goes to l₁ + (c − l₀)(h₁ − l₁)/(h₀ − l₀), l and
+    /// h the two walls' positions at t0 and t1 ([`crate::loading::Loading::wall_position`]);
+    /// along any other axis it stays. On `u` (every dof, the step's start); the walls then
+    /// move with Newton's line search as before.
     ///
     /// A particle that nothing touches is in equilibrium wherever it is; Newton left it where
     /// it was, and each update of a packing then aimed its particles through gaps the tangent
@@ -403,33 +403,16 @@ impl Simulation {
     /// relative to each other, and a loaded one starts nearer its compacted state
     /// (docs/robustness.md, thirtieth measurement: a loose step costs about one iteration, the
     /// suite's median 21 → 18 a step, the 1,024 random discs' ten steps 735 → 628).
-    pub(super) fn box_prediction(&mut self, u: &mut [f64]) -> Result<(), NewtonFailure> {
-        let Some(b) = self.barrier.as_ref() else { return Ok(()) };
-        let alpha0 = b.alpha;
-        // the walls where the step starts and where it ends
-        let (w0, w1) = (b.walls_at(alpha0), b.walls1.clone());
-        let span = |walls: &[crate::contact::Wall], axis: usize| {
-            let (mut lo, mut hi) = (None, None);
-            for w in walls {
-                let l = w.normal[0].hypot(w.normal[1]);
-                if l > 0.0 {
-                    let n = w.normal[axis] / l;
-                    if n > 0.999 {
-                        lo = Some(w.point[axis]);
-                    } else if n < -0.999 {
-                        hi = Some(w.point[axis]);
-                    }
-                }
-            }
-            lo.zip(hi)
-        };
+    pub(super) fn box_prediction(&mut self, u: &mut [f64], t0: f64, t1: f64) -> Result<(), NewtonFailure> {
+        let Some(alpha0) = self.barrier.as_ref().map(|b| b.alpha) else { return Ok(()) };
         // per axis: (l₀, l₁, the stretch); none where the walls do not bound it
-        let maps: Vec<Option<(f64, f64, f64)>> = (0..2)
-            .map(|axis| match (span(&w0, axis), span(&w1, axis)) {
-                (Some((l0, h0)), Some((l1, h1))) if h0 - l0 > 0.0 && h1 - l1 > 0.0 => Some((l0, l1, (h1 - l1) / (h0 - l0))),
-                _ => None,
-            })
-            .collect();
+        let loading = &self.model.loading;
+        let map = |lo: WallSide, hi: WallSide| {
+            let (l, h) = (loading.wall_on(lo)?, loading.wall_on(hi)?);
+            let (l0, h0, l1, h1) = (loading.wall_position(l, t0), loading.wall_position(h, t0), loading.wall_position(l, t1), loading.wall_position(h, t1));
+            (h0 > l0 && h1 > l1).then(|| (l0, l1, (h1 - l1) / (h0 - l0)))
+        };
+        let maps = [map(WallSide::Left, WallSide::Right), map(WallSide::Bottom, WallSide::Top)];
         if maps.iter().all(|m| m.is_none_or(|(l0, l1, s)| l0 == l1 && s == 1.0)) {
             return Ok(());
         }
@@ -501,7 +484,7 @@ impl Simulation {
             }
         }
         if self.dynamics.is_none() && self.barrier.as_ref().is_some_and(|b| b.predict) {
-            self.box_prediction(&mut u)?;
+            self.box_prediction(&mut u, self.sol.time, t)?;
         }
         let restart = self.run.dt_prev > 0.0;
         let trial = self.solve_from(u, inc, restart)?;
