@@ -177,8 +177,56 @@ velocity = 10.0
 /// 1e-3 × the mean diagonal on the diagonal (a mass term; removes the rigid-body modes), so the
 /// matrix is symmetric positive definite.
 pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
-    let text = disc_grid_case(n, 100.0, 0.78, mesh_size, "");
-    let case = crate::case::parse(&text, std::path::Path::new(".")).expect("benchmark case");
+    packing_tangent(&disc_grid_case(n, 100.0, 0.78, mesh_size, ""), 0.15 * 100.0 / n as f64)
+}
+
+/// Case text of `count` random polydisperse elastic aluminium discs (radii uniform between r
+/// and 2r, `[[packings]] kind = "discs"`, seed 29) at solid ratio 0.70 in a square die of side
+/// `side` mm, meshed at `mesh_size` (the packing of the 1,024-disc gauge of docs/performance.md
+/// at `count` = 1024, `side` = 320, `mesh_size` = 2).
+pub fn random_discs_case(count: usize, side: f64, mesh_size: f64) -> String {
+    format!(
+        r#"title = "benchmark random discs"
+[[materials]]
+name = "m"
+model = "elastic"
+youngs_modulus = 64100.0
+poisson_ratio = 0.3
+[[packings]]
+kind = "discs"
+count = {count}
+seed = 29
+solid_ratio = 0.70
+material = "m"
+sizes = {{ distribution = "uniform", ratio = 2.0 }}
+mesh_size = {mesh_size}
+[time]
+end = 1.0
+dt = 0.1
+[[walls]]
+side = "left"
+position = 0.0
+[[walls]]
+side = "right"
+position = {side}
+[[walls]]
+side = "bottom"
+position = 0.0
+[[walls]]
+side = "top"
+position = {side}
+"#
+    )
+}
+
+/// The stiffness-like matrix of the particles of case `text` with every degree of freedom
+/// free: the element tangent at u = 0, plus "contact" springs (stiffness 0.1 × the mean
+/// diagonal, the pattern of a contact tangent) joining every boundary node to the boundary
+/// nodes of other particles within `reach` mm, plus 1e-3 × the mean diagonal on the diagonal
+/// (a mass term; removes the rigid-body modes), so the matrix is symmetric positive definite.
+/// A small `reach` gives a loose packing's nearly block-diagonal tangent.
+pub fn packing_tangent(text: &str, reach: f64) -> CsrMatrix {
+    let case = crate::case::parse(text, std::path::Path::new(".")).expect("benchmark case");
     let model = Model::from_case(&case).expect("benchmark model");
     let (eq, n_free) = number_equations(model.n_dofs(), std::iter::empty());
     let (mut assembler, mut kk) = Assembler::new(&model, eq, n_free);
@@ -212,10 +260,21 @@ pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
             v
         })
         .collect();
-    let reach = 0.15 * 100.0 / n as f64;
+    // (each body's bounding box, to skip the pairs of bodies farther apart than `reach`)
+    let boxes: Vec<[f64; 4]> = boundary
+        .iter()
+        .map(|b| b.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |m, &i| {
+            let p = model.x0[i];
+            [m[0].min(p[0]), m[1].min(p[1]), m[2].max(p[0]), m[3].max(p[1])]
+        }))
+        .collect();
     let mut pairs = Vec::new();
     for (a, ba) in boundary.iter().enumerate() {
-        for bb in &boundary[a + 1..] {
+        for (k, bb) in boundary.iter().enumerate().skip(a + 1) {
+            let (p, q) = (boxes[a], boxes[k]);
+            if p[0] > q[2] + reach || q[0] > p[2] + reach || p[1] > q[3] + reach || q[1] > p[3] + reach {
+                continue;
+            }
             for &i in ba {
                 for &j in bb {
                     let (p, q) = (model.x0[i], model.x0[j]);

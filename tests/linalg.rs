@@ -134,7 +134,7 @@ fn lu_solves_nonsymmetric_convection_diffusion() {
     assert!((a.values[k01] - a.values[k10]).abs() > 1.0, "matrix must be nonsymmetric");
     let xs = x_star(a.nrows);
     let b = rhs_of(&a, &xs);
-    for structure in [FactorStructure::Auto, FactorStructure::Simplicial, FactorStructure::Supernodal] {
+    for structure in [FactorStructure::Auto, FactorStructure::FaerChoice, FactorStructure::Simplicial, FactorStructure::Supernodal] {
         let mut s = FaerLu::new(1).with_structure(structure);
         let (x, st) = run(&mut s, &a, &b).unwrap();
         check_solution(&a, &x, &xs, &b, &st, &format!("LU {structure:?} (nonsymmetric)"));
@@ -146,12 +146,18 @@ fn cholesky_solves_laplacian() {
     let a = laplacian(50);
     let xs = x_star(a.nrows);
     let b = rhs_of(&a, &xs);
-    for structure in [FactorStructure::Auto, FactorStructure::Simplicial, FactorStructure::Supernodal] {
+    for structure in [FactorStructure::Auto, FactorStructure::FaerChoice, FactorStructure::Simplicial, FactorStructure::Supernodal] {
         let mut s = FaerCholesky::new(1).with_structure(structure);
         let (x, st) = run(&mut s, &a, &b).unwrap();
         check_solution(&a, &x, &xs, &b, &st, &format!("Cholesky {structure:?}"));
         assert_eq!(s.kind(), Some(CholeskyKind::Llt));
         assert_eq!(s.analyses(), 1);
+        // the default is the supernodal kernels (faer's own choice would take the simplicial
+        // ones for this matrix: its fill is small)
+        match structure {
+            FactorStructure::Auto | FactorStructure::Supernodal => assert_eq!(s.is_supernodal(), Some(true), "{structure:?}"),
+            FactorStructure::FaerChoice | FactorStructure::Simplicial => assert_eq!(s.is_supernodal(), Some(false), "{structure:?}"),
+        }
     }
 }
 
@@ -308,7 +314,7 @@ fn cholesky_on_indefinite_symmetric_matrix_uses_ldlt_or_reports_singular() {
     let a = conv_diff(30, 0.0, 0.0, 1.2345);
     let xs = x_star(a.nrows);
     let b = rhs_of(&a, &xs);
-    for structure in [FactorStructure::Auto, FactorStructure::Simplicial, FactorStructure::Supernodal] {
+    for structure in [FactorStructure::Auto, FactorStructure::FaerChoice, FactorStructure::Simplicial, FactorStructure::Supernodal] {
         let mut s = FaerCholesky::new(1).with_structure(structure);
         match run(&mut s, &a, &b) {
             Ok((x, st)) => {
@@ -406,7 +412,7 @@ fn cholesky_on_saddle_point_matrix_does_not_panic() {
     let a = csr_from_entries(n, &entries);
     let xs = x_star(n);
     let b = rhs_of(&a, &xs);
-    for structure in [FactorStructure::Auto, FactorStructure::Simplicial, FactorStructure::Supernodal] {
+    for structure in [FactorStructure::Auto, FactorStructure::FaerChoice, FactorStructure::Simplicial, FactorStructure::Supernodal] {
         let mut s = FaerCholesky::new(1).with_structure(structure);
         match run(&mut s, &a, &b) {
             Ok((x, st)) => check_solution(&a, &x, &xs, &b, &st, &format!("saddle Cholesky {structure:?}")),

@@ -60,20 +60,31 @@ pub fn faer_par(threads: usize) -> Par {
     }
 }
 
-/// Which numeric kernel family faer uses. `Auto` lets faer decide from the estimated flop
-/// count of the factorisation (its default); the others force a choice (benchmarks, tests).
+/// Which numeric kernel family faer uses.
+///
+/// `Auto` (the default) is the supernodal kernels for the Cholesky factorisation and faer's
+/// own choice for LU. faer's choice (`FaerChoice`) takes the supernodal kernels only where the
+/// factorisation's flop count exceeds 40 times the factor's entries, and a particle packing's
+/// tangent, nearly block-diagonal, mostly falls below that: faer then factors it with its
+/// simplicial (up-looking) kernels, which were 1.3–2.2 times slower than the supernodal ones
+/// on every packing tangent measured, from 16 to 1,024 random discs (1,540 to 102,530
+/// unknowns), loose or with contacts (`cargo bench --bench structure`, docs/performance.md).
+/// The others force a choice (benchmarks, tests).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FactorStructure {
     #[default]
     Auto,
+    FaerChoice,
     Simplicial,
     Supernodal,
 }
 
 impl FactorStructure {
-    fn threshold(self) -> SupernodalThreshold {
+    /// The threshold for faer's analysis; `cholesky`: of a Cholesky factorisation (else LU).
+    fn threshold(self, cholesky: bool) -> SupernodalThreshold {
         match self {
-            FactorStructure::Auto => SupernodalThreshold::AUTO,
+            FactorStructure::Auto if cholesky => SupernodalThreshold::FORCE_SUPERNODAL,
+            FactorStructure::Auto | FactorStructure::FaerChoice => SupernodalThreshold::AUTO,
             FactorStructure::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
             FactorStructure::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
         }
@@ -122,7 +133,7 @@ fn symbolic_cholesky(
     ordering: FillOrdering,
     structure: FactorStructure,
 ) -> Result<SymbolicCholesky<usize>, LinalgError> {
-    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(), ..Default::default() };
+    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(true), ..Default::default() };
     let perm = fill_permutation(a, ordering);
     let ord = match &perm {
         Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, a.nrows)),
@@ -514,7 +525,7 @@ impl Factorisation for LuFactors {
         csr_to_csc_pattern(a, &mut self.col_ptr, &mut self.row_idx, &mut self.csc_pos);
         self.csc_values.clear();
         self.csc_values.resize(a.nnz(), 0.0);
-        let params = LuSymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(), ..Default::default() };
+        let params = LuSymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(false), ..Default::default() };
         let symbolic = factorize_symbolic_lu(self.csc_symbolic(a.nrows), params)
             .map_err(|e| LinalgError::Other(format!("faer symbolic LU failed: {e:?}")))?;
         let req = StackReq::any_of(&[
