@@ -9,6 +9,10 @@
 //! LU factorisation always uses faer's COLAMD column ordering: faer 0.24's symbolic LU takes no
 //! custom column permutation.
 //!
+//! The Cholesky factorisation holds the matrix permuted into its fill-reducing order
+//! (`Ordered`, made at the analysis), so that a numeric factorisation gathers the new values
+//! into it in one pass instead of faer permuting the matrix again.
+//!
 //! Both keep their symbolic factorisation (fill-reducing ordering, elimination tree, supernodes)
 //! and all numeric storage and scratch memory between calls: `factor` only refills values and
 //! runs the numeric factorisation, as long as the pattern is unchanged
@@ -601,6 +605,103 @@ pub struct CholeskyFactors {
     subdiag: Vec<f64>,
     perm_fwd: Vec<usize>,
     perm_inv: Vec<usize>,
+    ordered: Ordered,
+}
+
+/// The triangle of a symmetric CSR matrix A in its fill-reducing order, B = P A Pᵀ, as the
+/// CSC arrays faer factors, with the map that gathers its values from A's: made at the
+/// analysis, so that a numeric factorisation reads B as it stands. Given A and its
+/// permutation, faer would build B again at every numeric factorisation (counting its columns
+/// and scattering A's entries: 8.8 % of the 1,024 random discs' run, docs/performance.md);
+/// the gather is one pass over B's values.
+struct Ordered {
+    /// B's row i is A's row `fwd[i]`; A's row j is B's row `inv[j]`.
+    fwd: Vec<usize>,
+    inv: Vec<usize>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// B's k-th value is A's value `gather[k]`.
+    gather: Vec<usize>,
+    values: Vec<f64>,
+    /// The triangle held: `Lower` (rows i ≥ j in column j) for faer's supernodal kernels,
+    /// `Upper` for its simplicial ones (each reads its own side without a copy).
+    side: Side,
+}
+
+impl Default for Ordered {
+    fn default() -> Self {
+        Self { fwd: Vec::new(), inv: Vec::new(), col_ptr: vec![0], row_idx: Vec::new(), gather: Vec::new(), values: Vec::new(), side: Side::Lower }
+    }
+}
+
+impl Ordered {
+    /// B's triangle `side` of the symmetric `a` (full pattern) under the permutation
+    /// (`fwd`, `inv`); its values are gathered by [`Ordered::gather`]. Each entry is read
+    /// from the CSR upper triangle of `a` (its row ≤ its column), as faer reads `a`'s CSC
+    /// lower triangle: an assembled tangent is symmetric to round-off only, and this keeps
+    /// the factors those of faer's own permutation, bit for bit.
+    fn new(a: &CsrMatrix, fwd: Vec<usize>, inv: Vec<usize>, side: Side) -> Self {
+        let n = a.nrows;
+        // B's (row, column) of A's upper entry (r, c), r ≤ c, in the triangle held
+        let place = |r: usize, c: usize| {
+            let (i, j) = (inv[r], inv[c]);
+            if (side == Side::Lower) == (i >= j) {
+                (i, j)
+            } else {
+                (j, i)
+            }
+        };
+        let mut col_ptr = vec![0usize; n + 1];
+        for r in 0..n {
+            for &c in &a.col_idx[a.row_ptr[r]..a.row_ptr[r + 1]] {
+                if c >= r {
+                    col_ptr[place(r, c).1 + 1] += 1;
+                }
+            }
+        }
+        for j in 0..n {
+            col_ptr[j + 1] += col_ptr[j];
+        }
+        let nnz = col_ptr[n];
+        let (mut row_idx, mut gather) = (vec![0usize; nnz], vec![0usize; nnz]);
+        let mut next = col_ptr.clone();
+        for r in 0..n {
+            for k in a.row_ptr[r]..a.row_ptr[r + 1] {
+                let c = a.col_idx[k];
+                if c >= r {
+                    let (i, j) = place(r, c);
+                    row_idx[next[j]] = i;
+                    gather[next[j]] = k;
+                    next[j] += 1;
+                }
+            }
+        }
+        Self { fwd, inv, col_ptr, row_idx, gather, values: vec![0.0; nnz], side }
+    }
+
+    /// B's values from `a`'s (the matrix of the analysis, new values).
+    fn gather(&mut self, a: &CsrMatrix) {
+        for (v, &k) in self.values.iter_mut().zip(&self.gather) {
+            *v = a.values[k];
+        }
+    }
+
+    fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        let n = self.fwd.len();
+        SymbolicSparseColMatRef::new_unsorted_checked(n, n, &self.col_ptr, None, &self.row_idx)
+    }
+}
+
+/// faer's approximate minimum degree ordering of the symmetric `a` (full pattern), as faer's
+/// own analysis computes it with `SymmetricOrdering::Amd`: (forward, inverse).
+fn amd_permutation(a: &CsrMatrix) -> Result<(Vec<usize>, Vec<usize>), LinalgError> {
+    let n = a.nrows;
+    let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut mem = MemBuffer::try_new(faer::sparse::linalg::amd::order_maybe_unsorted_scratch::<usize>(n, a.nnz()))
+        .map_err(|_| LinalgError::Other("out of memory for the AMD ordering".into()))?;
+    faer::sparse::linalg::amd::order_maybe_unsorted(&mut fwd, &mut inv, csr_as_csc(a), CholeskySymbolicParams::default().amd_params, MemStack::new(&mut mem))
+        .map_err(|e| LinalgError::Other(format!("faer AMD ordering failed: {e:?}")))?;
+    Ok((fwd, inv))
 }
 
 impl FaerDirect<CholeskyFactors> {
@@ -642,8 +743,9 @@ impl CholeskyFactors {
             return Err(LinalgError::Other(format!("matrix entry {k} is not finite")));
         }
         let symbolic = self.symbolic.as_ref().expect("analysed");
-        let mat = SparseColMatRef::new(csr_as_csc(a), &a.values);
-        let llt = symbolic.factorize_numeric_llt(&mut self.l_values, mat, Side::Lower, Default::default(), par, MemStack::new(mem), Default::default());
+        self.ordered.gather(a);
+        let mat = SparseColMatRef::new(self.ordered.symbolic(), &self.ordered.values);
+        let llt = symbolic.factorize_numeric_llt(&mut self.l_values, mat, self.ordered.side, Default::default(), par, MemStack::new(mem), Default::default());
         match llt {
             Ok(_) => {
                 self.kind = Some(CholeskyKind::Llt);
@@ -670,7 +772,22 @@ impl Factorisation for CholeskyFactors {
 
     fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError> {
         let n = a.nrows;
-        let symbolic = symbolic_cholesky(a, self.ordering, structure)?;
+        // B = P A Pᵀ made here (`Ordered`), and analysed in its own order: the same ordering
+        // and symbolic factorisation as faer's analysis of A with P (so the same factors)
+        let (fwd, inv) = match fill_permutation(a, self.ordering) {
+            Some(p) => p,
+            None => amd_permutation(a)?,
+        };
+        // (faer's analysis without an ordering reads the upper triangle, whatever side it is
+        // told)
+        let upper = Ordered::new(a, fwd, inv, Side::Upper);
+        let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(true), ..Default::default() };
+        let symbolic = factorize_symbolic_cholesky(upper.symbolic(), Side::Upper, SymmetricOrdering::Identity, params)
+            .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))?;
+        self.ordered = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(_) => Ordered::new(a, upper.fwd, upper.inv, Side::Lower),
+            SymbolicCholeskyRaw::Simplicial(_) => upper,
+        };
         tracing::debug!(n, nnz = a.nnz(), factor = symbolic.len_val(), supernodal = matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)), "Cholesky analysed");
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
@@ -696,7 +813,9 @@ impl Factorisation for CholeskyFactors {
     fn factor(&mut self, a: &CsrMatrix, _n: usize, par: Par, mem: &mut MemBuffer) -> Result<(), LinalgError> {
         let Some(llt_pivot) = self.llt(a, par, mem)? else { return Ok(()) };
         let symbolic = self.symbolic.as_ref().expect("analysed");
-        let mat = SparseColMatRef::new(csr_as_csc(a), &a.values);
+        // (B's values, gathered by `llt`)
+        let side = self.ordered.side;
+        let mat = SparseColMatRef::new(self.ordered.symbolic(), &self.ordered.values);
 
         // Not positive definite: Bunch–Kaufman LBLᵀ inside supernodes (faer only offers it on the
         // supernodal structure; on the simplicial one it would be a plain LDLᵀ without error
@@ -709,7 +828,7 @@ impl Factorisation for CholeskyFactors {
                     &mut self.perm_fwd,
                     &mut self.perm_inv,
                     mat,
-                    Side::Lower,
+                    side,
                     par,
                     MemStack::new(mem),
                     Default::default(),
@@ -727,7 +846,7 @@ impl Factorisation for CholeskyFactors {
 
         let ldlt = without_panics(|| {
             symbolic
-                .factorize_numeric_ldlt(&mut self.l_values, mat, Side::Lower, Default::default(), par, MemStack::new(mem), Default::default())
+                .factorize_numeric_ldlt(&mut self.l_values, mat, side, Default::default(), par, MemStack::new(mem), Default::default())
                 .map(|_| ())
         });
         let Some(ldlt) = ldlt else {
@@ -758,15 +877,24 @@ impl Factorisation for CholeskyFactors {
         self.kind.map(|k| k == CholeskyKind::Llt)
     }
 
-    fn solve_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
+    fn solve_in_place(&self, mut rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
         let symbolic = self.symbolic.as_ref().expect("factored");
         let l_values = &self.l_values;
+        // the factors are B's = P A Pᵀ's: A x = b is B (P x) = P b
+        let fwd = &self.ordered.fwd;
+        let mut y = faer::Mat::<f64>::from_fn(rhs.nrows(), rhs.ncols(), |i, j| rhs[(fwd[i], j)]);
+        let y_mut = y.as_mut();
         match self.kind.expect("factored") {
-            CholeskyKind::Llt => LltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
-            CholeskyKind::Ldlt => LdltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack),
+            CholeskyKind::Llt => LltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, y_mut, par, stack),
+            CholeskyKind::Ldlt => LdltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, y_mut, par, stack),
             CholeskyKind::Lblt => {
-                let perm = PermRef::new_checked(&self.perm_fwd, &self.perm_inv, rhs.nrows());
-                IntranodeLbltRef::new(symbolic, l_values, &self.subdiag, perm).solve_in_place_with_conj(Conj::No, rhs, par, stack)
+                let perm = PermRef::new_checked(&self.perm_fwd, &self.perm_inv, y_mut.nrows());
+                IntranodeLbltRef::new(symbolic, l_values, &self.subdiag, perm).solve_in_place_with_conj(Conj::No, y_mut, par, stack)
+            }
+        }
+        for j in 0..rhs.ncols() {
+            for (i, &f) in fwd.iter().enumerate() {
+                rhs[(f, j)] = y[(i, j)];
             }
         }
     }
