@@ -1,5 +1,5 @@
 //! faer sparse direct solvers: LU with partial pivoting ([`FaerLu`]) and Cholesky
-//! ([`FaerCholesky`]: LLᵀ, falling back to a Bunch–Kaufman LBLᵀ or an LDLᵀ factorisation on the
+//! ([`FaerCholesky`]: LLᵀ, falling back to an LDLᵀ or a Bunch–Kaufman LBLᵀ factorisation on the
 //! same symbolic structure when the matrix is not positive definite). Both are a [`FaerDirect`]:
 //! the pattern check, the workspace and the checked solve are written once; [`LuFactors`] and
 //! [`CholeskyFactors`] hold what is each one's own.
@@ -590,8 +590,8 @@ pub enum CholeskyKind {
 /// triangle of the CSC view faer sees) are read — no copy is made.
 ///
 /// The numeric factorisation tries LLᵀ; when a pivot is not positive it falls back on the same
-/// symbolic structure to faer's intranode Bunch–Kaufman LBLᵀ (supernodal structure) and then to
-/// an unpivoted LDLᵀ; if all fail the result is [`LinalgError::Singular`].
+/// symbolic structure to an unpivoted LDLᵀ and then (supernodal structure) to faer's intranode
+/// Bunch–Kaufman LBLᵀ; if all fail the result is [`LinalgError::Singular`].
 pub type FaerCholesky = FaerDirect<CholeskyFactors>;
 
 /// What [`FaerCholesky`] holds of its own: the ordering, faer's symbolic factorisation, the
@@ -817,9 +817,27 @@ impl Factorisation for CholeskyFactors {
         let side = self.ordered.side;
         let mat = SparseColMatRef::new(self.ordered.symbolic(), &self.ordered.values);
 
-        // Not positive definite: Bunch–Kaufman LBLᵀ inside supernodes (faer only offers it on the
-        // supernodal structure; on the simplicial one it would be a plain LDLᵀ without error
-        // reporting, so that case goes straight to the LDLᵀ below).
+        // Not positive definite: LDLᵀ without pivoting on the same structure first, then (on the
+        // supernodal structure, the only one where faer offers it) Bunch–Kaufman LBLᵀ with its
+        // pivots chosen inside each supernode. The LDLᵀ first: on the penalty contact tangents
+        // of 3 × 3 elastic discs (tests/data/mpi_discs_3x3_pcg.toml with the direct solver) the
+        // LBLᵀ solves left relative residuals of 2e-6 to 1e-3 that refinement did not lower,
+        // and the run cut back 12 times to the LDLᵀ's none (its solves at 1e-12).
+        let ldlt = without_panics(|| {
+            symbolic
+                .factorize_numeric_ldlt(&mut self.l_values, mat, side, Default::default(), par, MemStack::new(mem), Default::default())
+                .map(|_| ())
+        });
+        let ldlt_failure = match ldlt {
+            Some(Ok(())) if self.l_values.iter().all(|v| v.is_finite()) => {
+                tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, factorised as LDLᵀ without pivoting");
+                self.kind = Some(CholeskyKind::Ldlt);
+                return Ok(());
+            }
+            Some(Ok(())) => "the LDLᵀ fallback produced non-finite values".to_string(),
+            Some(Err(e)) => format!("the LDLᵀ fallback failed ({e:?})"),
+            None => "the LDLᵀ fallback failed inside faer".to_string(),
+        };
         if matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
             let done = without_panics(|| {
                 symbolic.factorize_numeric_intranode_lblt(
@@ -834,43 +852,16 @@ impl Factorisation for CholeskyFactors {
                     Default::default(),
                 );
             });
-            if done.is_none() {
-                tracing::debug!("faer's intranode LBLᵀ panicked on this matrix; trying LDLᵀ");
-            }
             if done.is_some() && self.l_values.iter().chain(&self.subdiag).all(|v| v.is_finite()) {
-                tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, factorised as LBLᵀ");
+                tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, LDLᵀ failed, factorised as LBLᵀ");
                 self.kind = Some(CholeskyKind::Lblt);
                 return Ok(());
             }
         }
-
-        let ldlt = without_panics(|| {
-            symbolic
-                .factorize_numeric_ldlt(&mut self.l_values, mat, side, Default::default(), par, MemStack::new(mem), Default::default())
-                .map(|_| ())
-        });
-        let Some(ldlt) = ldlt else {
-            return Err(LinalgError::Singular(format!(
-                "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and the indefinite \
-                 factorisations failed inside faer; use the LU solver"
-            )));
-        };
-        match ldlt {
-            Ok(()) if self.l_values.iter().all(|v| v.is_finite()) => {
-                tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, factorised as LDLᵀ without pivoting");
-                self.kind = Some(CholeskyKind::Ldlt);
-                Ok(())
-            }
-            Ok(()) => Err(LinalgError::Singular(format!(
-                "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and the \
-                 LDLᵀ fallback produced non-finite values"
-            ))),
-            Err(e) => Err(LinalgError::Singular(format!(
-                "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and the \
-                 indefinite fallback failed ({e:?}); the matrix is singular or needs pivoting \
-                 across supernodes — use the LU solver"
-            ))),
-        }
+        Err(LinalgError::Singular(format!(
+            "Cholesky: matrix not positive definite (LLᵀ pivot {llt_pivot} ≤ 0) and {ldlt_failure}; \
+             the matrix is singular or needs pivoting across supernodes — use the LU solver"
+        )))
     }
 
     fn definite(&self) -> Option<bool> {
