@@ -708,3 +708,21 @@ fn a_zero_pivot_is_factored_by_lblt_on_the_supernodal_structure() {
         other => panic!("simplicial: expected a singular-matrix error, got {:?}", other.map(|(_, st)| st.relative_residual)),
     }
 }
+
+/// A matrix with an entry that is not finite is refused by the Cholesky factorisation with an
+/// error naming an entry, on either structure (faer is never handed NaN).
+#[test]
+fn cholesky_refuses_a_matrix_entry_that_is_not_finite() {
+    for structure in [FactorStructure::Simplicial, FactorStructure::Supernodal] {
+        let mut a = laplacian(10);
+        let mut s = FaerCholesky::new(1).with_structure(structure);
+        s.analyze(&a).unwrap();
+        s.factor(&a).unwrap();
+        let p = a.find(3, 4).expect("an off-diagonal entry");
+        let q = a.find(4, 3).expect("its transpose");
+        a.values[p] = f64::NAN;
+        a.values[q] = f64::NAN;
+        let e = s.factor(&a).expect_err("a NaN entry");
+        assert!(e.to_string().contains("not finite"), "{structure:?}: {e}");
+    }
+}

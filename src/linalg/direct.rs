@@ -679,11 +679,15 @@ impl Ordered {
         Self { fwd, inv, col_ptr, row_idx, gather, values: vec![0.0; nnz], side }
     }
 
-    /// B's values from `a`'s (the matrix of the analysis, new values).
-    fn gather(&mut self, a: &CsrMatrix) {
+    /// B's values from `a`'s (the matrix of the analysis, new values): whether they are all
+    /// finite (what faer reads of `a`; checked in the same pass).
+    fn gather(&mut self, a: &CsrMatrix) -> bool {
+        let mut finite = true;
         for (v, &k) in self.values.iter_mut().zip(&self.gather) {
             *v = a.values[k];
+            finite &= v.is_finite();
         }
+        finite
     }
 
     fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
@@ -739,11 +743,11 @@ impl CholeskyFactors {
     /// index of the first pivot that was not positive (nothing usable is held).
     fn llt(&mut self, a: &CsrMatrix, par: Par, mem: &mut MemBuffer) -> Result<Option<usize>, LinalgError> {
         self.kind = None;
-        if let Some(k) = a.values.iter().position(|v| !v.is_finite()) {
+        if !self.ordered.gather(a) {
+            let k = a.values.iter().position(|v| !v.is_finite()).unwrap_or(0);
             return Err(LinalgError::Other(format!("matrix entry {k} is not finite")));
         }
         let symbolic = self.symbolic.as_ref().expect("analysed");
-        self.ordered.gather(a);
         let mat = SparseColMatRef::new(self.ordered.symbolic(), &self.ordered.values);
         let llt = symbolic.factorize_numeric_llt(&mut self.l_values, mat, self.ordered.side, Default::default(), par, MemStack::new(mem), Default::default());
         match llt {
