@@ -47,7 +47,8 @@ use faer::{Conj, MatMut, Par, Side};
 /// ended the whole run with exit code 101. Behind this the factorisation fails like any other
 /// singular one: the next fallback is tried, and the Newton step cuts back. The panic hook is
 /// swapped for a silent one while `f` runs (the library does not print; the solver logs the
-/// failure through `tracing`).
+/// failure through `tracing`). Since the unpivoted LDLᵀ comes first, that case no longer
+/// reaches the LBLᵀ (`tests/cli.rs`).
 fn without_panics<T>(f: impl FnOnce() -> T) -> Option<T> {
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
@@ -856,6 +857,9 @@ impl Factorisation for CholeskyFactors {
                     Default::default(),
                 );
             });
+            if done.is_none() {
+                tracing::debug!("faer's intranode LBLᵀ panicked on this matrix");
+            }
             if done.is_some() && self.l_values.iter().chain(&self.subdiag).all(|v| v.is_finite()) {
                 tracing::debug!(pivot = llt_pivot, "Cholesky: not positive definite, LDLᵀ failed, factorised as LBLᵀ");
                 self.kind = Some(CholeskyKind::Lblt);
@@ -892,5 +896,20 @@ impl Factorisation for CholeskyFactors {
                 rhs[(f, j)] = y[(i, j)];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_panics;
+
+    /// A panic inside a factorisation (here an index out of bounds, as faer's was) becomes a
+    /// failure, `None`; a call that returns gives its value.
+    #[test]
+    fn a_panic_becomes_none() {
+        let v: Vec<usize> = vec![1, 2];
+        let k = v.len() + 1;
+        assert_eq!(without_panics(|| v[k]), None);
+        assert_eq!(without_panics(|| v[1]), Some(2));
     }
 }
