@@ -126,46 +126,36 @@ impl Fixture {
     }
 }
 
-/// Case text of an `n × n` grid of elastic aluminium discs (E = 64 100 MPa, ν = 0.3) at solid
-/// ratio `solid_ratio` in a square die of side `side` mm whose four walls move in at 10 mm/s,
-/// meshed at `mesh_size`, one time step of 0.1 s; `extra` is appended (further tables, such as
-/// `[contact]` or `[solver]`).
-pub fn disc_grid_case(n: usize, side: f64, solid_ratio: f64, mesh_size: f64, extra: &str) -> String {
+/// Case text of elastic aluminium particles (E = 64 100 MPa, ν = 0.3, material "m") described by
+/// `particles` (a `[[grids]]` or `[[packings]]` table) in a square die of side `side` mm whose
+/// four walls move in at `velocity` mm/s, one time step of 0.1 s; `extra` is appended.
+fn elastic_die_case(title: &str, particles: &str, side: f64, velocity: f64, extra: &str) -> String {
+    let walls: String = [("left", 0.0), ("right", side), ("bottom", 0.0), ("top", side)]
+        .iter()
+        .map(|(s, p)| format!("[[walls]]\nside = \"{s}\"\nposition = {p:?}\nvelocity = {velocity:?}\n"))
+        .collect();
     format!(
-        r#"title = "benchmark disc grid"
+        r#"title = "{title}"
 [[materials]]
 name = "m"
 model = "elastic"
 youngs_modulus = 64100.0
 poisson_ratio = 0.3
-[[grids]]
-material = "m"
-nx = {n}
-ny = {n}
-shape = "disc"
-solid_ratio = {solid_ratio}
-mesh_size = {mesh_size}
+{particles}
 [time]
 end = 1.0
 dt = 0.1
-[[walls]]
-side = "left"
-position = 0.0
-velocity = 10.0
-[[walls]]
-side = "right"
-position = {side}
-velocity = 10.0
-[[walls]]
-side = "bottom"
-position = 0.0
-velocity = 10.0
-[[walls]]
-side = "top"
-position = {side}
-velocity = 10.0
-{extra}"#
+{walls}{extra}"#
     )
+}
+
+/// Case text of an `n × n` grid of elastic aluminium discs (E = 64 100 MPa, ν = 0.3) at solid
+/// ratio `solid_ratio` in a square die of side `side` mm whose four walls move in at 10 mm/s,
+/// meshed at `mesh_size`, one time step of 0.1 s; `extra` is appended (further tables, such as
+/// `[contact]` or `[solver]`).
+pub fn disc_grid_case(n: usize, side: f64, solid_ratio: f64, mesh_size: f64, extra: &str) -> String {
+    let grid = format!("[[grids]]\nmaterial = \"m\"\nnx = {n}\nny = {n}\nshape = \"disc\"\nsolid_ratio = {solid_ratio}\nmesh_size = {mesh_size}");
+    elastic_die_case("benchmark disc grid", &grid, side, 10.0, extra)
 }
 
 /// The stiffness-like matrix of an `n × n` grid of elastic discs (E = 64 100 MPa, ν = 0.3) at a
@@ -182,41 +172,13 @@ pub fn particle_grid_tangent(n: usize, mesh_size: f64) -> CsrMatrix {
 
 /// Case text of `count` random polydisperse elastic aluminium discs (radii uniform between r
 /// and 2r, `[[packings]] kind = "discs"`, seed 29) at solid ratio 0.70 in a square die of side
-/// `side` mm, meshed at `mesh_size` (the packing of the 1,024-disc gauge of docs/performance.md
-/// at `count` = 1024, `side` = 320, `mesh_size` = 2).
+/// `side` mm with fixed walls, meshed at `mesh_size` (the packing of the 1,024-disc gauge of
+/// docs/performance.md at `count` = 1024, `side` = 320, `mesh_size` = 2).
 pub fn random_discs_case(count: usize, side: f64, mesh_size: f64) -> String {
-    format!(
-        r#"title = "benchmark random discs"
-[[materials]]
-name = "m"
-model = "elastic"
-youngs_modulus = 64100.0
-poisson_ratio = 0.3
-[[packings]]
-kind = "discs"
-count = {count}
-seed = 29
-solid_ratio = 0.70
-material = "m"
-sizes = {{ distribution = "uniform", ratio = 2.0 }}
-mesh_size = {mesh_size}
-[time]
-end = 1.0
-dt = 0.1
-[[walls]]
-side = "left"
-position = 0.0
-[[walls]]
-side = "right"
-position = {side}
-[[walls]]
-side = "bottom"
-position = 0.0
-[[walls]]
-side = "top"
-position = {side}
-"#
-    )
+    let packing = format!(
+        "[[packings]]\nkind = \"discs\"\ncount = {count}\nseed = 29\nsolid_ratio = 0.70\nmaterial = \"m\"\nsizes = {{ distribution = \"uniform\", ratio = 2.0 }}\nmesh_size = {mesh_size}"
+    );
+    elastic_die_case("benchmark random discs", &packing, side, 0.0, "")
 }
 
 /// The stiffness-like matrix of the particles of case `text` with every degree of freedom
