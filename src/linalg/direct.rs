@@ -36,6 +36,7 @@ use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, LuSymbolicParams, N
 use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
 use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
+use faer::mat::AsMatMut;
 use faer::{Conj, MatMut, Par, Side};
 
 /// faer parallelism for a thread count (0 or 1 → sequential).
@@ -131,21 +132,20 @@ fn fill_permutation(a: &CsrMatrix, ordering: FillOrdering) -> Option<(Vec<usize>
     }
 }
 
-/// Symbolic Cholesky of the lower triangle of `a` (its CSR upper triangle) with the given
-/// ordering.
-fn symbolic_cholesky(
-    a: &CsrMatrix,
-    ordering: FillOrdering,
-    structure: FactorStructure,
-) -> Result<SymbolicCholesky<usize>, LinalgError> {
-    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(true), ..Default::default() };
-    let perm = fill_permutation(a, ordering);
-    let ord = match &perm {
-        Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, a.nrows)),
-        None => SymmetricOrdering::Amd,
+/// The symbolic Cholesky factorisation of the symmetric `a` (full pattern) in its fill-reducing
+/// order P (`ordering`): B = P A Pᵀ's upper triangle ([`Ordered`]) and faer's analysis of it in
+/// its own order, the same ordering and symbolic factorisation as faer's analysis of A with P.
+fn ordered_symbolic(a: &CsrMatrix, ordering: FillOrdering, structure: FactorStructure) -> Result<(Ordered, SymbolicCholesky<usize>), LinalgError> {
+    let (fwd, inv) = match fill_permutation(a, ordering) {
+        Some(p) => p,
+        None => amd_permutation(a)?,
     };
-    factorize_symbolic_cholesky(csr_as_csc(a), Side::Lower, ord, params)
-        .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))
+    // (faer's analysis without an ordering reads the upper triangle, whatever side it is told)
+    let upper = Ordered::new(a, fwd, inv, Side::Upper);
+    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(true), ..Default::default() };
+    let symbolic = factorize_symbolic_cholesky(upper.symbolic(), Side::Upper, SymmetricOrdering::Identity, params)
+        .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))?;
+    Ok((upper, symbolic))
 }
 
 /// Number of nonzeros of the Cholesky factor L (diagonal included) of the symmetric matrix `a`
@@ -153,7 +153,7 @@ fn symbolic_cholesky(
 /// no numeric work).
 pub fn cholesky_factor_nnz(a: &CsrMatrix, ordering: FillOrdering) -> Result<usize, LinalgError> {
     check_square(a)?;
-    Ok(symbolic_cholesky(a, ordering, FactorStructure::Simplicial)?.len_val())
+    Ok(ordered_symbolic(a, ordering, FactorStructure::Simplicial)?.1.len_val())
 }
 
 /// Post-solve accuracy control of the direct solvers.
@@ -784,18 +784,9 @@ impl Factorisation for CholeskyFactors {
 
     fn analyse(&mut self, a: &CsrMatrix, structure: FactorStructure, par: Par) -> Result<StackReq, LinalgError> {
         let n = a.nrows;
-        // B = P A Pᵀ made here (`Ordered`), and analysed in its own order: the same ordering
-        // and symbolic factorisation as faer's analysis of A with P (so the same factors)
-        let (fwd, inv) = match fill_permutation(a, self.ordering) {
-            Some(p) => p,
-            None => amd_permutation(a)?,
-        };
-        // (faer's analysis without an ordering reads the upper triangle, whatever side it is
-        // told)
-        let upper = Ordered::new(a, fwd, inv, Side::Upper);
-        let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: structure.threshold(true), ..Default::default() };
-        let symbolic = factorize_symbolic_cholesky(upper.symbolic(), Side::Upper, SymmetricOrdering::Identity, params)
-            .map_err(|e| LinalgError::Other(format!("faer symbolic Cholesky failed: {e:?}")))?;
+        // B = P A Pᵀ made here (`Ordered`) and analysed in its own order (so the same factors
+        // as faer's of A with P); the supernodal kernels read B's lower triangle
+        let (upper, symbolic) = ordered_symbolic(a, self.ordering, structure)?;
         self.ordered = match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(_) => Ordered::new(a, upper.fwd, upper.inv, Side::Lower),
             SymbolicCholeskyRaw::Simplicial(_) => upper,
@@ -805,7 +796,8 @@ impl Factorisation for CholeskyFactors {
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, par),
+            // (a solve's right-hand side in B's order, `solve_in_place`, and faer's own scratch)
+            faer::linalg::temp_mat_scratch::<f64>(n, 1).and(symbolic.solve_in_place_scratch::<f64>(1, par)),
         ]);
         self.l_values.clear();
         self.l_values.resize(symbolic.len_val(), 0.0);
@@ -886,9 +878,16 @@ impl Factorisation for CholeskyFactors {
     fn solve_in_place(&self, mut rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
         let symbolic = self.symbolic.as_ref().expect("factored");
         let l_values = &self.l_values;
-        // the factors are B's = P A Pᵀ's: A x = b is B (P x) = P b
+        // the factors are B's = P A Pᵀ's: A x = b is B (P x) = P b, P b in the workspace (sized
+        // at the analysis for the one column every solve has)
         let fwd = &self.ordered.fwd;
-        let mut y = faer::Mat::<f64>::from_fn(rhs.nrows(), rhs.ncols(), |i, j| rhs[(fwd[i], j)]);
+        let (mut y, stack) = faer::linalg::temp_mat_zeroed::<f64, _, _>(rhs.nrows(), rhs.ncols(), stack);
+        let mut y = y.as_mat_mut();
+        for j in 0..rhs.ncols() {
+            for (i, &f) in fwd.iter().enumerate() {
+                y[(i, j)] = rhs[(f, j)];
+            }
+        }
         let y_mut = y.as_mut();
         match self.kind.expect("factored") {
             CholeskyKind::Llt => LltRef::new(symbolic, l_values).solve_in_place_with_conj(Conj::No, y_mut, par, stack),

@@ -194,7 +194,6 @@ impl Simulation {
                     first = false;
                     u.copy_from_slice(&self.sol.u);
                     self.model.loading.apply_prescribed(&mut u, t);
-
                     continue;
                 }
                 Err(e) => return Err(e),
