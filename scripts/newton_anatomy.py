@@ -8,8 +8,10 @@
 Per attempt: how it ended (converged, failed and retried descending, failed and cut back), its
 iterations, how many line searches the collision-free step limited (eta_max < 1) or backtracked
 (eta < eta_max), how many tangents were shifted (and the largest tau) or had their pair
-Hessians projected, the last relative residual, the median step, and the bodies that carried
-the largest out-of-balance force most often. A retry held up by one loose particle shows as
+Hessians projected, the last relative residual, the median step, how many updates moved their
+furthest-moved particle mostly rigidly (its deformation below half its largest nodal update:
+a loose particle the tangent barely holds) rather than by deforming it, and the bodies that
+carried the largest out-of-balance force most often. A retry held up by one loose particle shows as
 one body in most of its iterations (docs/robustness.md, eleventh measurement).
 Standard library only.
 """
@@ -28,7 +30,7 @@ def attempts(path):
     def new(kind):
         nonlocal cur
         cur = dict(kind=kind, end="converged", rows=[], its=0, res=[], eta=[], eta_max=[], shifts=[], projected=0,
-                   bodies=collections.Counter())
+                   bodies=collections.Counter(), rigid=0)
         out.append(cur)
 
     new("first")
@@ -43,6 +45,11 @@ def attempts(path):
             cur["res"].append(float(d["residual"]))
             cur["bodies"][d.get("body")] += 1
             cur["rows"].append(("it", k, d["residual"], d.get("body"), d.get("worst_force"), d.get("x", "")))
+        elif "largest update" in line:
+            d = dict(KV.findall(line))
+            largest, deformation = float(d["largest"]), float(d["deformation"])
+            cur["rigid"] += deformation < 0.5 * largest
+            cur["rows"].append(("lu", d["body"], largest, float(d["translation"]), float(d["turn"]), deformation))
         elif "barrier line search" in line:
             d = dict(KV.findall(line))
             cur["eta"].append(float(d["eta"]))
@@ -72,7 +79,7 @@ def summary(i, a):
     top = ", ".join(f"{b}: {c}" for b, c in a["bodies"].most_common(2))
     return (f"{i:4d} {a['kind']:8s} {a['end']:16s} its {a['its']:3d}  ccd-limited {limited:3d}  backtracked {backtracked:3d}"
             f"  shifts {len(a['shifts']):3d} (max tau {max(a['shifts'], default=0):.0e})  projected {a['projected']:2d}"
-            f"  last residual {a['res'][-1]:.1e}  median eta {median:.2f}  worst bodies {top}")
+            f"  last residual {a['res'][-1]:.1e}  median eta {median:.2f}  rigid {a['rigid']:3d}  worst bodies {top}")
 
 
 def detail(a):
@@ -82,6 +89,8 @@ def detail(a):
             lines.append(f"\n{r[1]:4d} residual {float(r[2]):.3e} body {r[3]} force {r[4]} at {r[5]}")
         elif r[0] == "ls":
             lines.append(f"  eta {float(r[1]):.3g}/{float(r[2]):.3g} update {r[3]} gap {r[4]}")
+        elif r[0] == "lu":
+            lines.append(f"  furthest body {r[1]} {r[2]:.3g} mm (translation {r[3]:.3g} mm, turn {r[4]:.3g} rad, deformation {r[5]:.3g} mm)")
         elif r[0] == "tau":
             lines.append(f"  tau {r[1]:.0e}")
         else:

@@ -124,6 +124,19 @@ struct BodyTurn {
 /// linearised rotation's change of area, θ², is then at round-off.
 const TURN_MIN: f64 = 1e-6;
 
+/// The particle a Newton update moves furthest (see `Simulation::largest_update`).
+struct LargestUpdate {
+    body: usize,
+    /// the largest nodal update (mm)
+    largest: f64,
+    /// the particle's mean translation (mm)
+    translation: f64,
+    /// its best-fit turn (rad)
+    turn: f64,
+    /// the largest nodal update less the translation and the linearised turn (mm)
+    deformation: f64,
+}
+
 /// The centroid c of nodes at `x0` + `u` (dofs interleaved) and the rotation θ about it that
 /// fits the update `du` best in the least-squares sense: θ = Σ r × Δu / Σ |r|² (the mean
 /// translation drops out since Σ r = 0).
@@ -143,6 +156,25 @@ fn best_fit_turn(x0: &[[f64; 2]], u: &[f64], du: &[f64]) -> ([f64; 2], f64) {
         den += r[0] * r[0] + r[1] * r[1];
     }
     (c, if den > 0.0 { num / den } else { 0.0 })
+}
+
+/// A particle's update `du` from `u` (its nodes at `x0`, dofs interleaved) split into its
+/// mean translation t, its best-fit turn θ about the centroid ([`best_fit_turn`]) and the
+/// largest nodal remainder |Δu − t − θ J r|, its deformation (J the quarter turn, r the node's
+/// position from the centroid).
+fn rigid_split(x0: &[[f64; 2]], u: &[f64], du: &[f64]) -> ([f64; 2], f64, f64) {
+    let n = x0.len().max(1) as f64;
+    let (c, turn) = best_fit_turn(x0, u, du);
+    let t = [du.iter().step_by(2).sum::<f64>() / n, du.iter().skip(1).step_by(2).sum::<f64>() / n];
+    let deformation = x0
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let r = [p[0] + u[2 * k] - c[0], p[1] + u[2 * k + 1] - c[1]];
+            (du[2 * k] - t[0] + turn * r[1]).hypot(du[2 * k + 1] - t[1] - turn * r[0])
+        })
+        .fold(0.0f64, f64::max);
+    (t, turn, deformation)
 }
 
 /// The point η of a Newton update Δu from u₀ in which every turning particle turns by ηθ
@@ -380,6 +412,14 @@ impl Simulation {
             for (d, &q) in self.sys.assembler.eq.iter().enumerate() {
                 du_full[d] = if q != FIXED { self.sys.du[q] } else { 0.0 };
             }
+            if tracing::enabled!(tracing::Level::DEBUG) {
+                // which particle the update moves most, and how: rigidly (a loose particle
+                // with little to hold it) or by deforming (docs/robustness.md, thirty-second
+                // measurement)
+                if let Some(m) = self.largest_update(&u[..], &du_full) {
+                    tracing::debug!(body = m.body, largest = m.largest, translation = m.translation, turn = m.turn, deformation = m.deformation, "largest update");
+                }
+            }
             // line search: backtrack while the residual grows or an element fails
             let u0: Vec<f64> = u.to_vec();
             let line_search = self.spec.line_search;
@@ -613,6 +653,24 @@ impl Simulation {
         unreachable!("the loop returns at s = 1")
     }
 
+    /// The particle whose nodes a Newton update `du` (every dof) from `u` moves furthest, and
+    /// that motion split into the particle's mean translation, its best-fit turn about its
+    /// centroid (rad) and the largest nodal remainder (the deformation), all in mm but the
+    /// turn. For the debug log only.
+    fn largest_update(&self, u: &[f64], du: &[f64]) -> Option<LargestUpdate> {
+        let nodal = |k: usize| du[2 * k].hypot(du[2 * k + 1]);
+        let (body, b, largest) = self
+            .model
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (i, b, (b.node_offset..b.node_offset + b.mesh.nodes.len()).map(nodal).fold(0.0f64, f64::max)))
+            .max_by(|x, y| x.2.total_cmp(&y.2))?;
+        let (lo, hi) = (b.node_offset, b.node_offset + b.mesh.nodes.len());
+        let (t, turn, deformation) = rigid_split(&self.model.x0[lo..hi], &u[2 * lo..2 * hi], &du[2 * lo..2 * hi]);
+        Some(LargestUpdate { body, largest, translation: t[0].hypot(t[1]), turn, deformation })
+    }
+
     /// The particles a Newton update `du` (every dof) from `u` turns by more than
     /// [`TURN_MIN`], with their centroids and best-fit rotations; particles with a prescribed
     /// dof are left straight.
@@ -687,7 +745,7 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use super::{barrier_descent, best_fit_turn, double_root, quartered, turned_point, within_round_off, BarrierLine, BodyTurn};
+    use super::{barrier_descent, best_fit_turn, double_root, quartered, rigid_split, turned_point, within_round_off, BarrierLine, BodyTurn};
 
     /// Π(η) = ½ c (η − η*)² along a Newton update whose curvature is off (η* the true
     /// minimiser): −Π′(η) = c (η* − η), g0 = c η*. Closed form, exact to round-off.
@@ -709,6 +767,31 @@ mod tests {
 
     fn position(x0: &[[f64; 2]], u: &[f64], n: usize) -> [f64; 2] {
         [x0[n][0] + u[2 * n], x0[n][1] + u[2 * n + 1]]
+    }
+
+    #[test]
+    fn an_update_splits_into_its_translation_turn_and_deformation() {
+        let (x0, u0) = ring();
+        let (c, _) = best_fit_turn(&x0, &u0, &vec![0.0; u0.len()]);
+        // Δu = t + θ J r on every node, and a bump b on the centre node (index 12): it moves the
+        // mean by b/13 and leaves 12 b/13 at the centre; it turns the fit by r₁₂ × b / Σ|r|²
+        // only, r₁₂ the centre's offset from the centroid (u₀'s perturbation, of order 1e-2 mm)
+        let (theta, t, b) = (0.2, [0.4, -0.9], [0.3, 0.4]);
+        let mut du: Vec<f64> = (0..x0.len()).flat_map(|n| {
+            let p = position(&x0, &u0, n);
+            let r = [p[0] - c[0], p[1] - c[1]];
+            [t[0] - theta * r[1], t[1] + theta * r[0]]
+        }).collect();
+        let (t0, turn0, def0) = rigid_split(&x0, &u0, &du);
+        assert!((t0[0] - t[0]).abs() < 1e-14 && (t0[1] - t[1]).abs() < 1e-14 && (turn0 - theta).abs() < 1e-14 && def0 < 1e-14, "{t0:?} {turn0} {def0}");
+        du[24] += b[0];
+        du[25] += b[1];
+        let (t1, turn1, def1) = rigid_split(&x0, &u0, &du);
+        assert!((t1[0] - t[0] - b[0] / 13.0).abs() < 1e-14 && (t1[1] - t[1] - b[1] / 13.0).abs() < 1e-14, "{t1:?}");
+        // (Σ|r|² = 300 mm²: the turn moves by about 0.5 × 1e-2 / 300, below 1e-4, and the
+        // deformation by that times 5 mm at most)
+        assert!((turn1 - theta).abs() < 1e-4, "{turn1}");
+        assert!((def1 - 0.5 * 12.0 / 13.0).abs() < 1e-3, "{def1}");
     }
 
     #[test]
