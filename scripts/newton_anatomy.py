@@ -6,13 +6,15 @@
     python3 scripts/newton_anatomy.py run.log --attempt 6  # that attempt iteration by iteration
 
 Per attempt: how it ended (converged, failed and retried descending, failed and cut back), its
-iterations, how many line searches the collision-free step limited (eta_max < 1) or backtracked
-(eta < eta_max), how many tangents were shifted (and the largest tau) or had their pair
-Hessians projected, the last relative residual, the median step, how many updates moved their
-furthest-moved particle mostly rigidly (its deformation below half its largest nodal update:
-a loose particle the tangent barely holds) rather than by deforming it, and the bodies that
-carried the largest out-of-balance force most often. A retry held up by one loose particle shows as
-one body in most of its iterations (docs/robustness.md, eleventh measurement).
+iterations, how many of its last updates were taken whole (eta = eta_max = 1: neither the
+collision-free step nor the line search held them back), how many line searches the
+collision-free step limited (eta_max < 1) or backtracked (eta < eta_max), how many tangents
+were shifted (and the largest tau) or had their pair Hessians projected, the last relative
+residual, the median step, how many updates moved their furthest-moved particle mostly
+rigidly (its deformation below half its largest nodal update: a loose particle the tangent
+barely holds) rather than by deforming it, and the bodies that carried the largest
+out-of-balance force most often. A retry held up by one loose particle shows as one body in
+most of its iterations (docs/robustness.md, eleventh measurement).
 Standard library only.
 """
 import collections
@@ -76,8 +78,14 @@ def summary(i, a):
     limited = sum(1 for m in a["eta_max"] if m < 1.0)
     backtracked = sum(1 for e, m in zip(a["eta"], a["eta_max"]) if e < m)
     median = sorted(a["eta"])[n // 2] if n else float("nan")
+    # the updates taken whole (η = η_max = 1) at the attempt's end
+    tail = 0
+    for e, m in zip(reversed(a["eta"]), reversed(a["eta_max"])):
+        if e != 1.0 or m != 1.0:
+            break
+        tail += 1
     top = ", ".join(f"{b}: {c}" for b, c in a["bodies"].most_common(2))
-    return (f"{i:4d} {a['kind']:8s} {a['end']:16s} its {a['its']:3d}  ccd-limited {limited:3d}  backtracked {backtracked:3d}"
+    return (f"{i:4d} {a['kind']:8s} {a['end']:16s} its {a['its']:3d}  whole at the end {tail:3d}  ccd-limited {limited:3d}  backtracked {backtracked:3d}"
             f"  shifts {len(a['shifts']):3d} (max tau {max(a['shifts'], default=0):.0e})  projected {a['projected']:2d}"
             f"  last residual {a['res'][-1]:.1e}  median eta {median:.2f}  rigid {a['rigid']:3d}  worst bodies {top}")
 
