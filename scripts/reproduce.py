@@ -33,255 +33,289 @@ PAPER = {
     "5_2_2_asphalt_vertical": dict(section="5.2.2", phi=0.9919, p={"left/right": 162.7, "bottom/top": 97.5}, time=43, steps=None, onset="0.86"),
     "5_2_3_asphalt_biaxial": dict(section="5.2.3", phi=0.9928, p={"left": 143.1, "right": 146.1, "top": 132.9, "bottom": 142.4}, time=43, steps=None, onset="0.86"),
 }
-# Why ours differ, per job (written after looking at the runs; see also the job files).
-NOTES = {
-    "5_1_1_aluminium_lateral":
-    "At 98.43 % our walls are within 7 % of the paper's (6.6 % below and 0.7 % above; in the previous version of "
-    "this file, with the stabilisation springs out of the residual and steps that grow, 3.6 % below and 3.2 % "
-    "above; in the one before, with the barrier's stabilisation springs ζ = 1e-8 anchored where each step "
-    "starts, 0.4 % and 7.8 % above; in the one before that, with the rotation linearised in the line search, "
-    "7.1 % and 0.4 % below; in the one before that, with the barrier on the nodes alone, 5.3 % below and 0.2 % "
-    "above; with the penalty "
-    "method, before the barrier was the default: 11.5 % and 8.9 % below). The paper's particles and positions "
-    "are not given (we use a regular 4 x 5 grid of ellipses) and it re-meshes; ours does not need to. The "
-    "pressure starts to rise at 0.785, within the paper's 0.77-0.79 (0.794, 0.775, 0.785, 0.79, 0.81, 0.79, "
-    "0.79, 0.79, 0.80, 0.78 and 0.79 on the eleven previous paths below; the penalty runs: 0.73, their springs and "
-    "overlaps carrying load early). This job's path scatters (see 6.1): the previous versions of this file, with "
-    "other Newton paths (39, 39, 39, 39, 55, 64, 89, 96, 96, 90 and 270 steps; 39 today), had the walls at 279.6 "
-    "and 232.0, 291.0 and 242.3, 269.5 and 223.9, 274.7 and 225.2, 274.6 and 222.8, 291.0 and 237.1, 280.0 "
-    "and 233.1, 282.2 and 234.5, 280.9 and 226.6, 275.7 and 223.7, and 283.2 and 234.4 MPa at 98.43 %, up "
-    "to 7.1 % below and 7.8 % above the paper.",
-    "5_1_2_aluminium_vertical":
-    "The paper gives left/right 290.8 and top/bottom 228.9 MPa, yet says in the same paragraph that the "
-    "left-right pressure is less than the up-down pressure; in our run the pressing (top/bottom) walls carry "
-    "more, which agrees with that sentence, not with its numbers. The top/bottom value is 12 % above the "
-    "paper's (255.7 MPa in 39 steps, 11.7 %; 254.8 in the previous version of this file, 39 steps, with the "
-    "stabilisation springs out of the residual and steps that grow; 250.9 in the one before, 39 steps, with the "
-    "stabilisation springs ζ = 1e-8 in the residual; 250.2 in the one before, 41 steps, with the rotation linearised "
-    "in the line search; 247.4 in the one before, 39 steps, with the barrier on the nodes alone; 239.3 in the one before, 52 steps, 238.7 in the one before, 87 steps, 243.9 in the one "
-    "before that, 96 steps, 243.2 before that, 113 steps, 257.8 before that, 66 steps, and 259.6 before that, 87 steps); in the version before those, 168 steps, it was 5 % "
-    "above (239.9 MPa): the path scatter of this regular grid (see 6.1). The pressure first rises at 0.766, "
-    "just below the paper's 0.77-0.79, and goes on rising (39.7 MPa on the top/bottom walls at 0.775), with "
-    "one dip, from 61.4 to 54.9 MPa between 0.804 and 0.814. In the previous version of this file it first rose "
-    "at 0.748: the grid jammed there and carried up to 46 MPa (top/bottom) at 0.775, let go in the next step "
-    "(the walls at zero at 0.785, the active contacts down from 329 to 57, 290 Newton iterations) and took load "
-    "again from 0.795.",
-    "5_1_3_aluminium_biaxial":
-    "Our run reaches the paper's 0.9937 without re-meshing. Our regular grid gives exactly equal left/right "
-    "and top/bottom pairs; the paper's four walls differ by up to 10 %, the mark of an irregular packing. "
-    "Ours are 17-39 % above the paper's at 0.9937 (364.0 and 390.6 MPa; 28-52 % in the previous version of "
-    "this file, with the stabilisation springs out of the residual and steps that grow, 398.2 and 425.2 MPa; "
-    "36-57 % in the one before, with the stabilisation springs ζ = 1e-8 in the residual, 422.0 and 439.8 MPa; "
-    "28-48 % in the one before that, with the rotation linearised in the line search, 395.3 and 416.0 MPa; "
-    "25-49 % in the one before that, "
-    "with the barrier on the nodes alone, 387.5 and 416.5 MPa; 22-45 % in the one before that, 378.3 and 405.1 MPa, "
-    "9-30 % in the one before that, 11-34 % in the one before that), where the "
-    "pressure rises steeply: in this version it grows by 31-32 % from 0.987 to 0.9937 (274.8 -> 364.0 "
-    "MPa left/right, 298.8 -> 390.6 top/bottom; 36-38 % in the previous version, 60-61 % in the one before, "
-    "42-44 % in the version with 22-45 %), so a shift of 0.001 in solid ratio moves it by about 13-14 MPa, 4 %; "
-    "the penalty method gave 302 "
-    "and 340 MPa there, its overlaps counting as solid. Since the version with 9-30 % "
-    "a node facing a corner of another particle feels one barrier, not two (docs/robustness.md, "
-    "fourteenth measurement); since then a converged saddle is left (sixteenth "
-    "measurement), which changed this grid's path; the 50 and then 100 Newton iterations a solve "
-    "did not, the barrier integrated along the edges moved these walls by 2 % and less, turning the "
-    "particles an update rotates exactly (twenty-second measurement) by 7 % (left/right) and 6 % "
-    "(top/bottom), taking the springs out of the residual, with steps that grow (the previous version), by 6 % "
-    "and 3 %, both lower, and projecting the pairs' Hessians before the diagonal is shifted (this version) by "
-    "9 % and 8 %, lower again. With fixed steps of 0.5, 0.25, 0.125 and 0.0625 s the left/right walls at 0.9937 were "
-    "351.2, 379.6, 343.4 and 355.7 MPa (twenty-third measurement, with the springs still in the residual): "
-    "near full density this grid's pressures depend on the sequence of steps.",
-}
+# Why ours differ, per job: each note is a function of the run (its history rows and
+# summary.json), so that the figures it quotes are those of the tables above it; what it says
+# of earlier versions of this file is history (their figures are in its git history).
+
+
+def mean_at(rows, phi, keys):
+    """Mean of the columns `keys` at solid ratio `phi` (None beyond the run)."""
+    vals = [at(rows, phi, k) for k in keys]
+    return None if any(v is None for v in vals) else sum(vals) / len(vals)
+
+
+LR, BT = ("p_left", "p_right"), ("p_bottom", "p_top")
+
+
+def rel(ours, ref):
+    """`ours` against `ref`, in percent with its sign."""
+    return f"{100 * (ours / ref - 1):+.1f} %"
+
+
+def within(onset_, lo, hi):
+    """How a measured onset sits against the paper's range lo-hi."""
+    if onset_ is None:
+        return "not found"
+    if lo - 1e-9 <= onset_ <= hi + 1e-9:
+        return f"within the paper's {lo}-{hi}"
+    return f"{'below' if onset_ < lo else 'above'} the paper's {lo}-{hi}"
+
+
+def note_5_1_1(rows, s):
+    lr, bt = mean_at(rows, 0.9843, LR), mean_at(rows, 0.9843, BT)
+    o = onset(rows, list(LR))
+    return (f"At 98.43 % our walls are {lr:.1f} (left/right, {rel(lr, 290.0)}) and {bt:.1f} MPa (bottom/top, "
+            f"{rel(bt, 224.8)}) against the paper's 290.0 and 224.8. The paper's particles and positions are not given "
+            "(we use a regular 4 x 5 grid of ellipses) and it re-meshes; ours does not need to. The pressure starts to "
+            f"rise at {o:.3f}, {within(o, 0.77, 0.79)} (0.775-0.81 on the twelve earlier paths of this file; the "
+            "penalty runs: 0.73, their springs and overlaps carrying load early). This regular grid's path scatters "
+            "near full density (see 6.1): the earlier versions of this file, on other Newton paths, had its walls at "
+            "98.43 % from 7.1 % below to 7.8 % above the paper's (with the penalty method, before the barrier was the "
+            "default: 11.5 % and 8.9 % below).")
+
+
+def note_5_1_2(rows, s):
+    lr, bt = mean_at(rows, 0.9790, LR), mean_at(rows, 0.9790, BT)
+    o = onset(rows, list(BT))
+    return ("The paper gives left/right 290.8 and top/bottom 228.9 MPa, yet says in the same paragraph that the "
+            "left-right pressure is less than the up-down pressure; in our run the pressing (top/bottom) walls carry "
+            f"{'more' if bt > lr else 'less'} ({bt:.1f} against {lr:.1f} MPa at 0.9790), which agrees with that "
+            f"sentence{', not with its numbers' if bt > lr else ''}. The top/bottom value is {rel(bt, 228.9)} against "
+            f"the paper's, in {len(rows)} steps; the earlier versions of this file, on other Newton paths, had "
+            "238.7-259.6 MPa there (the path scatter of this regular grid, see 6.1). The pressure first rises at "
+            f"{o:.3f}, {within(o, 0.77, 0.79)} (0.748-0.766 on the last two earlier paths, one of which jammed "
+            "at 0.748 and let go again).")
+
+
+def note_5_1_3(rows, s):
+    lr, bt = mean_at(rows, 0.9937, LR), mean_at(rows, 0.9937, BT)
+    lr0, bt0 = mean_at(rows, 0.987, LR), mean_at(rows, 0.987, BT)
+    lo = min(100 * (lr / 309.9 - 1), 100 * (bt / 297.2 - 1))
+    hi = max(100 * (lr / 290.9 - 1), 100 * (bt / 280.3 - 1))
+    slope = (lr - lr0) / (0.9937 - 0.987) / 1000
+    return ("Our run reaches the paper's 0.9937 without re-meshing. Our regular grid gives exactly equal left/right "
+            "and top/bottom pairs; the paper's four walls differ by up to 10 %, the mark of an irregular packing. "
+            f"Ours are {lo:.0f}-{hi:.0f} % above the paper's at 0.9937 ({lr:.1f} and {bt:.1f} MPa), where the "
+            f"pressure rises steeply: from 0.987 to 0.9937 it grows by {100 * (lr / lr0 - 1):.0f} % "
+            f"({lr0:.1f} -> {lr:.1f} MPa left/right, {bt0:.1f} -> {bt:.1f} top/bottom), so a shift of 0.001 in "
+            f"solid ratio moves it by about {slope:.0f} MPa. The earlier versions of this file, on other Newton "
+            "paths, had 364.0-422.0 (left/right) and 390.6-439.8 MPa (top/bottom) there; with fixed steps of 0.5, "
+            "0.25, 0.125 and 0.0625 s the left/right walls were 351.2, 379.6, 343.4 and 355.7 MPa (docs/robustness.md, "
+            "twenty-third measurement): near full density this grid's pressures depend on the sequence of steps. The "
+            "penalty method gave 302 and 340 MPa, its overlaps counting as solid.")
+
+
 ASPHALT = ("Asphalt creeps, so the loading time matters: the paper reports 43 s to reach ~99 %, but walls at "
            "10 mm/s close a 1 m die from 0.80 to 0.99 in under 10 s (our runs), so the paper's particles had about four "
            "times longer to relax and its pressures are lower; the stress unit of the creep coefficient A is not stated "
            "either (we read Pa; jobs/examples/asphalt_creep_block.toml shows how strongly that choice matters). "
-           "Our volume error is below 7e-11 because nu = 0.5 is enforced exactly (augmented Lagrangian); the paper's 0.6 % "
-           "is not reproduced by design. The onset of the pressure rise (0.848-0.850) is close to the paper's 0.86.")
+           "nu = 0.5 is enforced exactly (augmented Lagrangian), so our volume error (6.5) is round-off; the paper's "
+           "0.6 % is not reproduced by design.")
 CORNERS = ("With the barrier contact, the default, the octagon grids need no contact key and no re-meshing. With the "
            "penalty method they needed the smoothed contact normal (with straight segments they jammed at 0.92-0.96) and "
            "let the octagons overlap by up to 2.6 mm (a quarter of an element), overlap that counts as solid: at 0.95 the "
-           "two methods agree within 2.2 %, at 0.99 the barrier's walls carry 9-31 % more (docs/robustness.md; "
-           "measured on an earlier version, and these grids' paths have changed since: see 6.2).")
-NOTES["5_2_1_asphalt_lateral"] = ASPHALT + " " + CORNERS + (
-    " The walls at 0.9913 carry 198.7 (left/right) and 176.1 MPa (bottom/top) in this version, 255.6 and 217.0 MPa "
-    "in the previous version of this file, with the stabilisation springs out of the residual and steps that grow, "
-    "and 199.4 and 176.3 MPa in the one before, with the stabilisation springs ζ = 1e-8 in the residual; with fixed steps of 0.5, "
-    "0.25, 0.125 and 0.0625 s the left/right walls at 0.9914 were 199.9, 210.9, 211.6 and 269.5 MPa "
-    "(docs/robustness.md, twenty-third measurement, with the springs still in the residual): near full density "
-    "this grid's pressures depend on the sequence of steps.")
-NOTES["5_2_2_asphalt_vertical"] = ASPHALT + (
-    " On this square grid vertical compaction is lateral compaction turned by 90 degrees; the two runs agree, "
-    "walls swapped, in their first 20 steps, up to 0.986, to the ten digits of their history.csv once the walls "
-    "carry load (with the same cut-back, in the step from 0.919, and one to four Newton iterations more in three "
-    "of this run's steps), and part only in their last "
-    "steps, to 0.9914 and 0.9920, their own targets: at 0.99 they are 0.5-0.6 % apart (in the previous version, "
-    "with the stabilisation springs out of the residual and steps that grow, within 0.03 % at solid ratios "
-    "0.85-0.95 and 0.6 % at 0.98, 0.7 % at most at the steps both runs took, up to 0.974, and they parted in "
-    "this run's last step, from 0.986 to 0.992 in 390 Newton iterations, where its walls fell from 230.5 and "
-    "193.4 MPa to 209.8 and 173.4 while those of 5.2.1, whose step from 0.963 was cut back, went on rising: at "
-    "0.99 they were 13-14 % apart; in the one before, with the stabilisation springs ζ = 1e-8 in the "
-    "residual, within 2.9 % up to 0.95 and within 2.0 % at 0.98-0.99; in the one before that, with the rotation "
-    "linearised in the line search, within 1.2 % and 1.4 %; in the one before that, with the barrier "
-    "on the nodes alone, within 0.3 % and 3.3 %; in the one before that within 0.2 % and 3.4 %, before this run took 27 steps instead of 25; in the one before that to "
-    "the digits of the table up to 0.98; earlier they parted by 6-9 % at 0.98-0.99, when a node facing a corner felt two "
-    "barriers and round-off took the two runs down different paths). See 5.2.1 for the contact.")
-NOTES["5_2_3_asphalt_biaxial"] = ASPHALT + (" The regular grid gives equal left/right and bottom/top pairs, and four "
-    "equal walls up to 0.90; from 0.92 on the pairs part, 217.7 and 212.6 MPa at 0.9928, 2.4 % apart (209.3 and "
-    "201.8 MPa, 4 % apart, in the previous version of this file, with the stabilisation springs out of the "
-    "residual and steps that grow; four equal walls, 216.1 MPa, in the one before, with the stabilisation "
-    "springs in the residual). "
-    "The paper's differ by up to 10 %. See 5.2.1 for the contact.")
+           "two methods agreed within 2.2 %, at 0.99 the barrier's walls carried 9-31 % more (docs/robustness.md, "
+           "measured on an earlier version; these grids' paths have changed since: see 6.2).")
+
+
+def asphalt_onset(rows):
+    pressing = [k for k in ["p_left", "p_right", "p_bottom", "p_top"] if rows[-1][k] > 0]
+    o = onset(rows, pressing)
+    return f" The pressure starts to rise at {o:.3f}, against the paper's 0.86."
+
+
+def note_5_2_1(rows, s):
+    lr, bt = mean_at(rows, 0.9913, LR), mean_at(rows, 0.9913, BT)
+    return (ASPHALT + asphalt_onset(rows) + " " + CORNERS + f" The walls at 0.9913 carry {lr:.1f} (left/right) and "
+            f"{bt:.1f} MPa (bottom/top); the earlier versions of this file, on other Newton paths, had 198.7-255.6 and "
+            "176.1-217.0 MPa, and with fixed steps of 0.5, 0.25, 0.125 and 0.0625 s the left/right walls at 0.9914 were "
+            "199.9, 210.9, 211.6 and 269.5 MPa (docs/robustness.md, twenty-third measurement): near full density this "
+            "grid's pressures depend on the sequence of steps.")
+
+
+def note_5_2_2(rows, s):
+    lateral = os.path.join(OUT, "5_2_1_asphalt_lateral", "history.csv")
+    twin = ""
+    if os.path.exists(lateral):
+        other = history("5_2_1_asphalt_lateral")
+        same = 0
+        for x, y in zip(other, rows):
+            pairs = [(x["solid_ratio"], y["solid_ratio"]), (x["p_left"], y["p_bottom"]), (x["p_bottom"], y["p_left"])]
+            if any(abs(u - v) > 1e-9 * max(abs(u), abs(v), 1e-30) for u, v in pairs):
+                break
+            same += 1
+        a, b = mean_at(other, 0.99, LR), mean_at(rows, 0.99, BT)
+        twin = (" On this square grid vertical compaction is lateral compaction turned by 90 degrees: the two runs "
+                f"agree, walls swapped, in their first {same} steps, to solid ratio {rows[same - 1]['solid_ratio']:.3f}, to "
+                "nine digits or more, and then part as round-off takes the two grids along different branches (the "
+                f"pressing walls at 0.99: {a:.1f} and {b:.1f} MPa, {abs(100 * (b / a - 1)):.1f} % apart).") if same else ""
+    return ASPHALT + asphalt_onset(rows) + twin + " See 5.2.1 for the contact."
+
+
+def note_5_2_3(rows, s):
+    parted = [r for r in rows if r["p_left"] > 0 and abs(r["p_left"] / r["p_bottom"] - 1) > 1e-3]
+    lr, bt = mean_at(rows, 0.9928, LR), mean_at(rows, 0.9928, BT)
+    pairs = (f"the left/right and bottom/top pairs part by more than 0.1 % from {parted[0]['solid_ratio']:.3f} on "
+             f"({lr:.1f} and {bt:.1f} MPa at 0.9928)") if parted else f"all four walls stay equal to 0.1 % ({lr:.1f} MPa at 0.9928)"
+    return (ASPHALT + asphalt_onset(rows) + " The regular grid gives equal left/right and bottom/top pairs; " + pairs +
+            ". The paper's four walls differ by up to 10 %. See 5.2.1 for the contact.")
+
+
+NOTES = {
+    "5_1_1_aluminium_lateral": note_5_1_1,
+    "5_1_2_aluminium_vertical": note_5_1_2,
+    "5_1_3_aluminium_biaxial": note_5_1_3,
+    "5_2_1_asphalt_lateral": note_5_2_1,
+    "5_2_2_asphalt_vertical": note_5_2_2,
+    "5_2_3_asphalt_biaxial": note_5_2_3,
+}
+
+
+def runs_of(d):
+    """The runs of a study directory: (label, history rows, summary) in the study's order."""
+    order = sorted(os.listdir(d))
+    table = os.path.join(d, "study.csv")
+    if os.path.exists(table):
+        with open(table) as f:
+            order = [r["label"] for r in csv.DictReader(f)]
+    out = []
+    for label in order:
+        path = os.path.join(d, label, "history.csv")
+        if os.path.exists(path):
+            with open(path) as f:
+                rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+            summary = os.path.join(d, label, "summary.json")
+            out.append((label, rows, json.load(open(summary)) if os.path.exists(summary) else {}))
+    return out
+
+
+def values(runs, phi, keys):
+    return [mean_at(rows, phi, keys) for _, rows, _ in runs]
+
+
+def listing(vals, spec=".1f"):
+    return ", ".join("—" if v is None else format(v, spec) for v in vals)
+
+
+def steps_and_cutbacks(runs):
+    steps = [len(rows) for _, rows, _ in runs]
+    cuts = [((s.get("run") or {}).get("cutbacks") or 0) for _, _, s in runs]
+    springs = max(((s.get("final") or {}).get("stabilisation_ratio") or 0.0) for _, _, s in runs)
+    spr = "the springs doing no work" if springs == 0 else f"the springs taking at most {100 * springs:.3f} % of the wall work"
+    def span(v):
+        return f"{min(v)}" if min(v) == max(v) else f"{min(v)}-{max(v)}"
+    return f"{span(steps)} steps with {span(cuts)} cut-backs, {spr}"
+
+
+def spread(vals):
+    v = [x for x in vals if x is not None]
+    return 100 * (max(v) / min(v) - 1)
+
+
+def study_5_3(runs):
+    labels = [l for l, _, _ in runs]
+    parts = []
+    for phi in (0.90, 0.95, 0.98):
+        v = values(runs, phi, ("p_top",))
+        hi, lo = labels[v.index(max(v))], labels[v.index(min(v))]
+        parts.append(f"{listing(v)} MPa at {phi:.2f} ({spread(v):.0f} %; {hi} the stiffest, {lo} the softest)")
+    return ("The paper (its Table 3 and the four arrangements are illegible or pictures only) gives the order of the "
+            "required pressure, arrangement 1 > 4 > 3 > 2; its arrangements cannot be matched to ours, so the order "
+            f"cannot be checked. Ours, with three asphalts whose creep coefficient spans a factor 4 ({', '.join(labels)}): "
+            f"all four reach the 0.99 target in {steps_and_cutbacks(runs)}. The top wall carries " + "; ".join(parts) +
+            ". Which arrangement is the stiffest has changed from version to version of this file (the random one, "
+            "the checkerboard and the columns each were, at 0.98), and in an older one all four were within 5 % at "
+            "0.98: the spread near full density is which branch each grid takes, not the arrangements', and it is not a "
+            "result. At 10 mm/s the particles have little time to creep, so how the creep rates are arranged matters "
+            "little. With the penalty method the random and checkerboard runs snapped near 0.89, with springs "
+            "stiffened on cut-back that took up to 8 % of the wall work.")
+
+
+def study_6_1(runs):
+    labels = [l for l, _, _ in runs]
+    parts, signs = [], []
+    for phi in (0.90, 0.95, 0.98):
+        v = values(runs, phi, LR)
+        d = [100 * (x / v[0] - 1) for x in v[1:]]
+        parts.append(f"{listing(v)} MPa at {phi:.2f} ({', '.join(f'{x:+.1f} %' for x in d)} against frictionless)")
+        signs.append((phi, all(x > 0 for x in d), all(x < 0 for x in d)))
+    up = [f"{phi:.2f}" for phi, u, _ in signs if u]
+    verdict = (f"Confirmed in sign at {', '.join(up)} only" if up else "Not confirmed in sign at 0.90, 0.95 or 0.98")
+    return ("The paper: friction raises the wall pressure, about 20 % between the cases. " + verdict + ": on the "
+            f"pressing (left/right) walls the runs ({', '.join(labels)}) carry " + "; ".join(parts) + ". All four reach "
+            f"0.99 in {steps_and_cutbacks(runs)}, the sticking one with the barrier's ties (with the penalty method it "
+            "failed at 0.715, an element inverting at the first ties). The path scatter decides: on the regular grid the "
+            "ellipses choose between branches (a row that slides, a column that buckles) by round-off and by the step "
+            "sizes, and between the versions of this file one run's walls moved by up to 28 % at 0.90, 11 % at 0.95 "
+            "and 13 % at 0.98 (this job's 5.1.1 is the frictionless run). The earlier versions had friction raising "
+            "the pressing walls at 0.90 by up to 31 % and at 0.95 by 4-11 %, and at 0.98 raising or lowering them by "
+            "a few per cent: differences between the friction cases smaller than that scatter are not a result.")
+
+
+def study_6_2(runs):
+    labels = [l.replace("phi0_", "") for l, _, _ in runs]
+    parts = [f"{listing(values(runs, phi, LR))} MPa at {phi:.2f}" for phi in (0.90, 0.95, 0.98)]
+    steps = [len(rows) for _, rows, _ in runs]
+    v95, v98 = values(runs, 0.95, LR), values(runs, 0.98, LR)
+    soft = labels[v98.index(min(v98))]
+    stiff = labels[v98.index(max(v98))]
+    sooner = steps[0] == min(steps)
+    return ("The paper: about 15 % spread between initial solid ratios 0.65 and 0.80, the 0.65 case converging sooner. "
+            f"Ours: all four reach the target in {steps_and_cutbacks(runs)}. Left/right walls for the starts "
+            f"{', '.join(labels)}: " + "; ".join(parts) + f"; a spread of {spread(v95):.0f} % at 0.95 and "
+            f"{spread(v98):.0f} % at 0.98, the start from {stiff} the stiffest and from {soft} the softest at 0.98. "
+            f"{'Confirmed' if sooner else 'Not confirmed'}: the 0.65 case converging sooner ({listing(steps, 'd')} "
+            "steps; it has the furthest to go). The grids lose stability on the way (the grid from 0.65, compressed "
+            "from the sides, turns into an arrangement of rotated octagons) and go on along another branch, softer or "
+            "stiffer by the path: the order of the starts has changed from version to version of this file (the start "
+            "from 0.80, the same run as 5.2.1, was the stiffest in one and the softest in others), so only the spread's "
+            "size is a result; the paper does not say which way. History: when a node facing a corner first felt one "
+            "barrier, the run from 0.65 jammed at 0.9545 (it kept the symmetric path past the point where it lost "
+            "stability and then snapped); since a converged saddle is left (docs/robustness.md, sixteenth measurement) "
+            "every version has reached the target. With the penalty method the runs from 0.65 and 0.75 jammed at 0.935 "
+            "and 0.968.")
+
+
+def study_6_3(runs):
+    labels = [l.replace("n", "") for l, _, _ in runs]
+    v90, v95, v98 = (values(runs, phi, LR) for phi in (0.90, 0.95, 0.98))
+    rel98 = ", ".join(f"{100 * (x / v98[0] - 1):+.0f} %" for x in v98[1:])
+    softer = all(b < a for a, b in zip(v98, v98[1:]))
+    return ("The paper: the more particles, the softer, about 10 % spread. " + ("Confirmed" if softer else "Not confirmed") +
+            f": at solid ratio 0.98 the left/right walls carry {listing(v98)} MPa for {', '.join(labels)} octagons "
+            f"({rel98} against one); at 0.90 {listing(v90)} MPa, at 0.95 {listing(v95)}. The 16-octagon run is 6.2's "
+            "run from 0.80 and 5.2.1, whose walls near full density have moved by a third between versions of this "
+            "file (138.0 to 205.1 MPa at 0.98): the trend is within the path scatter of these grids. All four reach the "
+            f"target in {steps_and_cutbacks(runs)} (with the penalty method they needed the smoothed normal, the "
+            "viscous retry and the stiffened springs).")
+
+
+def study_6_4(runs):
+    v = {label: (mean_at(rows, 0.95, LR), mean_at(rows, 0.98, LR)) for label, rows, _ in runs}
+    lat, ver, bia = v.get("lateral"), v.get("vertical"), v.get("biaxial")
+    if not (lat and ver and bia):
+        return ""
+    def cmp(a, b):
+        return f"{100 * (a[0] / b[0] - 1):+.0f} % and {100 * (a[1] / b[1] - 1):+.0f} %"
+    above_v = bia[0] > ver[0] and bia[1] > ver[1]
+    above_l = bia[0] > lat[0] and bia[1] > lat[1]
+    return ("The paper: the lateral (left/right) pressure of biaxial compaction about 10 % above lateral and about 40 % "
+            "above vertical compaction. Ours, left/right walls at solid ratios 0.95 and 0.98: biaxial "
+            f"{bia[0]:.1f} and {bia[1]:.1f} MPa, lateral {lat[0]:.1f} and {lat[1]:.1f}, vertical {ver[0]:.1f} and "
+            f"{ver[1]:.1f}; biaxial is {cmp(bia, ver)} against vertical ({'confirmed' if above_v else 'not confirmed'} "
+            f"in sign) and {cmp(bia, lat)} against lateral ({'confirmed' if above_l else 'not confirmed'} in sign). In "
+            "our lateral run the left/right walls are the pressing ones; in the biaxial run the load is shared by all "
+            "four walls. The lateral and vertical runs carry the path scatter of 6.1 (they are 5.1.1 and 5.1.2), and "
+            "the earlier versions of this file had biaxial 5-49 % above vertical and 2-14 % below lateral at 0.95: only "
+            f"the signs are results. All three reach their target in {steps_and_cutbacks(runs)}.")
+
+
 STUDY_NOTES = {
-    "5_3_mixed_asphalts":
-    "The paper (its Table 3 and the four arrangements are illegible or pictures only) gives the order of the "
-    "required pressure, arrangement 1 > 4 > 3 > 2; its arrangements cannot be matched to ours, so the order "
-    "cannot be checked. Ours, with three asphalts whose creep coefficient spans a factor 4: all four runs "
-    "reach the 0.99 target in 21 steps (the random one in 22) with one cut-back each (the random one two), the "
-    "springs doing no work. The top wall carries 58.3 (random), 57.9 (rows), 65.3 (columns) and 59.6 MPa "
-    "(checkerboard) at solid ratio 0.90, a 13 % spread, 85.5-121.5 MPa at 0.95 (42 %) and 131.3-152.0 MPa at "
-    "0.98 (16 %), the random arrangement the stiffest at 0.95 and 0.98, the columns the softest at 0.95 and the "
-    "rows at 0.98. In the previous version of this file, with the stabilisation springs out of the residual and "
-    "steps that grow, 58.3-65.3 MPa at 0.90 (12 %), 82.2-120.3 MPa at 0.95 (46 %) and 128.0-151.9 MPa at 0.98 "
-    "(19 %), the rows then the softest and the random arrangement the stiffest at 0.95 and 0.98; in the one "
-    "before, with the stabilisation springs ζ = 1e-8 in the residual, 57.8-65.3 MPa at 0.90 (13 %), "
-    "89.2-121.3 MPa at 0.95 (36 %) and 122.9-155.2 MPa at 0.98 (26 %), the rows then the softest and the "
-    "checkerboard the stiffest at 0.95 and 0.98; in the one before that, with the rotation linearised in the line "
-    "search, 59.1-65.3 MPa at 0.90 (10 %), 88.6-116.4 MPa at 0.95 "
-    "(31 %) and 131.7-156.2 MPa at 0.98 (19 %), the columns then the softest at 0.95 and 0.98; in the one before "
-    "that, with the barrier on the nodes alone, "
-    "57.1-59.1 MPa at 0.90 (3.5 %), 89.9-122.4 MPa at 0.95 and 125.9-200.0 MPa at 0.98, the columns then the "
-    "stiffest at 0.98: the order changes from version to version. In the one before that, with 50 Newton iterations a solve, the "
-    "checkerboard run took 53 steps and 14 cut-backs and its springs 1.27 % of the wall work: cut back "
-    "where the particles rearrange, its springs stiffened and held the grid until it snapped "
-    "(docs/robustness.md, eighteenth measurement); with 100 it converges that step. With 25, the "
-    "random run jammed at 0.9893 and three of the runs snapped (the grid losing stability and jumping into "
-    "a softer arrangement through steps cut back to 1e-4 s, the springs taking the energy the jump "
-    "released; docs/robustness.md, fifteenth and seventeenth measurements); in an older one, when a node "
-    "facing a corner felt two barriers, all four reached 0.99 with spreads of 2 % at 0.90 and 0.95 and 5 % "
-    "at 0.98 (189.3-198.5 MPa). So the spread near full density is which branch each grid takes, not the "
-    "arrangements': it is not a result. At 10 mm/s the particles have little time to creep, so how the creep "
-    "rates are arranged matters little. With the penalty method the random and checkerboard runs snapped "
-    "near 0.89 too, with springs stiffened on cut-back that took up to 8 % of the wall work.",
-    "6_1_friction":
-    "The paper: friction raises the wall pressure, about 20 % between the cases. Confirmed in sign at 0.90, "
-    "0.95 and 0.98, of the paper's size at 0.90 only: on the pressing (left/right) walls (table above) the runs "
-    "carry 171.6 MPa frictionless, 179.5 with mu = 0.1, 190.7 with mu = 0.2 and 178.7 sticking at 0.95 (4-11 % "
-    "more with friction), 110.1, 130.4, 139.2 and 126.5 at 0.90 (+15 to +26 %) and 251.6, 266.6, 274.0 and "
-    "265.1 at 0.98 (+5.4 to +8.9 %), mu = 0.2 the stiffest at all three. In this version the barrier's descent "
-    "projects the pairs' Hessians before it shifts the diagonal, which changed every run's path (39, 39, 40 and "
-    "39 steps instead of 39, 41, 40 and 39); the previous version, with the stabilisation springs out of the "
-    "residual and steps that grow, had 104.4, 117.8, 126.7 and 126.4 MPa at 0.90, 164.4, 174.8, 177.0 and 180.1 "
-    "at 0.95 and 256.9, 261.8, 264.3 and 263.1 at 0.98 (the sticking run then the stiffest at 0.95). In that "
-    "version the stabilisation springs were taken out of the residual and the steps made to grow, which changed every "
-    "run's path (39, 41, 40 and 39 steps instead of 39, 41, 40 and 40); the "
-    "version before, with the springs ζ = 1e-8, had 109.5, 113.2, 120.2 and 132.1 MPa at 0.90, 168.6, 173.6, "
-    "171.3 and 180.0 at 0.95 and 266.1, 265.9, 257.3 and 255.2 at 0.98 (friction then lowering the walls at 0.98 "
-    "by up to 4.1 %). In that version a particle that a Newton update rotates was first turned exactly "
-    "(docs/robustness.md, twenty-second measurement), which changed every run's path (39, 41, 40 and 40 steps "
-    "instead of 39, 39, 40 and 42); the version before had 115.2, 127.2, 114.2 and 128.6 MPa at 0.90, 167.7, "
-    "170.5, 172.3 and 177.9 at 0.95 and 249.8, 250.7, 253.1 and 249.3 at 0.98. In that version the descent's "
-    "retry got 2,000 iterations instead "
-    "of 400 (twenty-first measurement), which changed the mu = 0.1 run's path (39 steps instead of 53; it had "
-    "115.5, 178.4 and 273.6 MPa at 0.90, 0.95 and 0.98 in the version before). In the version before that "
-    "the barrier was integrated along the edges for the first time (twentieth measurement), which changed "
-    "every run's path (39, 53, 40 and 42 steps); the version before that, with the barrier on the nodes alone, had "
-    "108.4, 114.3, 130.2 and 135.6 MPa at 0.90, 164.8, 175.0, 179.4 and 180.9 at 0.95 and 252.6, 260.8, 259.7 "
-    "and 272.8 at 0.98 (39, 74, 40 and 42 steps). Before that, with 50 Newton iterations a solve, "
-    "they had 103.2, 110.5, 124.6 and 135.6 MPa at 0.90 and "
-    "165.8, 170.2, 176.5 and 180.9 at 0.95, and with 25 iterations 106.3, 111.6, 118.9 and 134.8 at 0.90 and "
-    "164.7, 168.4, 175.2 and 173.0 at 0.95. The path "
-    "scatter: on the regular grid the ellipses choose between branches (a row that slides, a column that "
-    "buckles) by round-off and by the step sizes. The same four runs in an older version of this file "
-    "(96, 92, 92 and 55 steps instead of 89, 126, 90 and 49) carried 113.0, 118.7, 108.8 and 129.7 MPa at "
-    "0.90, 162.3, 172.4, 174.5 and 176.3 at 0.95 and 253.9, 265.0, 255.4 and 282.6 at 0.98 (mu = 0.2 then "
-    "below mu = 0.1 at 0.90 and 0.98); in the version before, 118.4, 122.1, 121.8 and 132.3 at 0.90. "
-    "Differences between the friction cases smaller than that scatter (one run's walls moved by up to 28 % at "
-    "0.90, 11 % at 0.95 and 13 % at 0.98 between the versions this note records) are not a result; what every "
-    "version shows is the sticking run above the frictionless one at 0.90 (15 % in this one, 12-31 % in each "
-    "earlier one this note records) and at 0.95 (4 % in this one, 5-10 % in the earlier ones). All "
-    "four runs reach 0.99, the sticking one with the barrier's ties (with the penalty method it failed at "
-    "0.715, an element inverting at the first ties); the springs do no work, as in the previous version (at most "
-    "0.013 % of the wall work in the one before).",
-    "6_2_initial_solid_ratio":
-    "The paper: about 15 % spread between initial solid ratios 0.65 and 0.80, the 0.65 case converging "
-    "sooner. Ours: all four reach the target in 21-36 steps with 0-1 cut-backs, the springs doing no work. "
-    "Left/right walls at solid ratio 0.90: 67.1 (0.65), 75.2 (0.70), 68.1 (0.75) and 69.5 MPa "
-    "(0.80); at 0.95 114.3, 115.0, 105.0 and 86.9; at 0.98 158.7, 196.2, 172.6 and 141.8 (every run took another "
-    "path in this version, the barrier's descent projecting the pairs' Hessians before it shifts the diagonal; "
-    "in the previous version, with the stabilisation springs out of the residual and the steps growing, they had "
-    "62.2, 61.7, 59.3 and 69.5 MPa at 0.90, 101.4, 113.2, 98.1 and 124.6 at 0.95 and 157.9, 181.5, 152.8 and "
-    "202.5 at 0.98; in the one before, with the springs ζ = 1e-8, they had 63.4, 61.7, 47.4 and 69.6 MPa at 0.90, 115.4, 111.4, 94.1 and "
-    "89.5 at 0.95 and 167.8, 193.8, 165.0 and 144.8 at 0.98, every run on another path than before as the "
-    "particles an update rotates were first turned exactly; in the one before that they had 61.4, "
-    "50.9, 50.7 and 69.6 MPa at 0.90, 101.4, 102.5, 94.1 and 87.5 at 0.95 and 154.8, 174.1, 164.2 and 143.5 at "
-    "0.98, the run from 0.65 on a path of its own since the descent's retry got 2,000 iterations "
-    "instead of 400: 59.3, 96.8 and 158.1 MPa before that). The start from 0.80 "
-    "(the same run as 5.2.1) is the softest at 0.95 and 0.98, the looser starts 21-32 % and 12-38 % stiffer "
-    "than it there; at 0.90 they are 4 % below to 8 % above it, the start from 0.70 the stiffest. In the "
-    "previous version of this file it was the stiffest at 0.90, 0.95 and 0.98, the looser starts 10-15 %, "
-    "9-21 % and 10-25 % softer than it; in the one before, the stiffest at 0.90 and the softest at 0.95 and "
-    "0.98, the looser starts 5-29 % and 14-34 % stiffer than it there (8-17 % and 8-21 % in the one before "
-    "that, with the rotation linearised in the line search); in the one before that, with the barrier on the nodes alone, the looser starts were 17-28 % "
-    "softer than it at 0.95 (103.5, 101.7, 89.5 and 124.3 MPa) and 3-23 % stiffer at 0.98 (170.2, 168.0, 142.2 "
-    "and 138.0): a spread of the paper's size or larger, whose sign is the path's; the paper does not say "
-    "which way. The grids lose stability on the way "
-    "(the grid from 0.65, compressed from the sides, turns into an arrangement of rotated octagons; the one "
-    "from 0.80, in this version, in its step from 0.919 to 0.929, which was cut back and in which its walls "
-    "fall from 87.9 to 81.5 MPa) and go on along another branch, softer or stiffer by the path. Not confirmed: the 0.65 case converging sooner. History: in an older version, "
-    "when a node facing a corner first felt one barrier, the run from 0.65 JAMMED at 0.9545 (it kept the symmetric path past the point "
-    "where it lost stability and then snapped, the springs taking 16 % of the wall work); in the next "
-    "one, where a converged saddle is left (docs/robustness.md, sixteenth measurement), it reached the "
-    "target in 71 steps with the springs at 0.82 %, with 50 Newton iterations a solve (seventeenth "
-    "measurement) in 39 steps with 4.3e-6, with 100 in 36 steps with 3.6e-6, with the barrier along the edges in 36 with 5.6e-6, "
-    "with the descent's 2,000 iterations in 36 with 2.7e-6, with the particles an update rotates turned exactly "
-    "in 36 with 2.7e-6 again, without the springs in the residual in 36 with no work in the springs, and with "
-    "the pairs' Hessians projected before the diagonal is shifted (this version) in 36 again with none. Before all that, when a node facing a corner felt "
-    "two barriers, all four reached the target and the loosest start was the stiffest. So which branch a "
-    "regular grid takes decides these pressures, and only the spread's size is a result. With the penalty "
-    "method the runs from 0.65 and 0.75 jammed at 0.935 and 0.968 even with the viscous retry and the "
-    "stiffened springs.",
-    "6_3_particle_count":
-    "The paper: the more particles, the softer, about 10 % spread. Not confirmed: at solid ratio 0.98 the "
-    "left/right walls carry 177.7, 187.1, 192.8 and 141.8 MPa for 1, 4, 9 and 16 octagons, 5 % and 8 % "
-    "stiffer than one with 4 and 9 and then 20 % softer with 16 (in the previous version of this file, with the "
-    "stabilisation springs out of the residual and steps that grow, 202.5 MPa with 16, 14 % stiffer than one, "
-    "the more particles the stiffer; in the one before, with the "
-    "stabilisation springs ζ = 1e-8 in the residual, 183.0, 194.0 and 144.8 MPa for 4, 9 and 16, 3 % and 9 % "
-    "stiffer than one and then 19 % softer with 16; in the one before that, with the "
-    "rotation linearised in the line search, 175.7 and 143.5 MPa for 9 and 16, within 3 % from 1 to 9 particles; "
-    "in the one before that, with the barrier on the "
-    "nodes alone, 185.5, 197.0 and 138.0 MPa for 4, 9 and 16; in the one before that, with 50 Newton iterations a solve, "
-    "205.1 MPa with 16: 15 % STIFFER than one); at 0.90 62.5, 64.8, 67.2 and "
-    "69.5 MPa (11 %), at 0.95 116.9, 123.1, 127.0 and 86.9 MPa (the 16 the softest, 26 % below one, and the 9 "
-    "the stiffest, 9 % above it; in the previous version the 9 the stiffest as well, with 124.6 MPa for 16; in "
-    "the one before the 16 the softest, by 23 % with 89.5 MPa, and by 25 % with 87.5 MPa in the one before that). "
-    "In an older version, when a node "
-    "facing a corner felt two barriers, 4 particles were 12 % softer than one at 0.98 (183.6 MPa): the "
-    "trend is within the path scatter of these grids, as the 16-particle run (6.2's run from 0.80; 144.8 MPa "
-    "at 0.98 two versions ago, 202.5 in the previous version, 141.8 in this one) shows. All four reach the target without a "
-    "stabilisation key, the springs doing no work (with the penalty method they needed the smoothed normal, "
-    "the viscous retry and the stiffened springs).",
-    "6_4_compaction_types":
-    "The paper: the lateral (left/right) pressure of biaxial compaction about 10 % above lateral and about 40 "
-    "% above vertical compaction. Ours, left/right walls at the same solid ratio (table above): biaxial is 37 "
-    "% and 14 % above vertical at 0.95 and 0.98 (151.9 against 110.9 MPa and 231.4 against 202.1; confirmed "
-    "in sign), but 8-11 % BELOW lateral (171.6 and 251.6; not confirmed). In the previous version, with the "
-    "stabilisation springs out of the residual and steps that grow, biaxial was 15 % and 14 % above vertical "
-    "and 8-10 % below lateral (151.1 against 131.7 and 164.4 MPa at 0.95); in the one before, with the "
-    "stabilisation springs ζ = 1e-8 in the residual, 5 % and 7 % above vertical and 13-14 % below "
-    "lateral (144.3 against 137.3 and 168.6 MPa at 0.95); in the one before that, with the "
-    "rotation linearised in the line search, 12 % and 7 % above vertical and 9 % below lateral "
-    "(153.0 against 136.5 and 167.7 MPa at 0.95); in the one before that, with the barrier "
-    "on the nodes alone, 16 % and 10 % above vertical and 9-10 % below lateral; in the one before that, with 50 "
-    "Newton iterations a solve, 12 % and 14 % above vertical and 10 % below lateral; in an older "
-    "one, before a converged saddle was left, 20 % above vertical and 4-5 % below lateral. In our lateral run the left/right walls "
-    "are the pressing ones; in the biaxial run the load is shared by all four walls, so at 0.95 and 0.98 "
-    "each carries less (at 0.85 and 0.90 the biaxial run's left/right walls carry more, 83.1 and 115.9 MPa "
-    "against 65.0 and 110.1). The lateral and vertical runs carry the path scatter of 6.1: in the previous "
-    "versions of this file the vertical run's left/right walls carried 131.7, 137.3, 136.5, 128.9, 133.9, 132.8, "
-    "107.4 and 130.5 MPa at 0.95, biaxial then 5-49 % above vertical and 2-14 % below lateral. So only the signs are "
-    "results. All three reach their target.",
+    "5_3_mixed_asphalts": study_5_3,
+    "6_1_friction": study_6_1,
+    "6_2_initial_solid_ratio": study_6_2,
+    "6_3_particle_count": study_6_3,
+    "6_4_compaction_types": study_6_4,
 }
 WALLS = {"left": ["p_left"], "right": ["p_right"], "bottom": ["p_bottom"], "top": ["p_top"],
          "left/right": ["p_left", "p_right"], "bottom/top": ["p_bottom", "p_top"]}
@@ -344,6 +378,15 @@ def fmt(v, spec=".1f"):
 
 
 def report():
+    found = []
+    for job in ("5_1_1_aluminium_lateral", "5_1_2_aluminium_vertical", "5_1_3_aluminium_biaxial"):
+        if os.path.exists(os.path.join(OUT, job, "history.csv")):
+            rows = history(job)
+            pressing = [k for k in ["p_left", "p_right", "p_bottom", "p_top"] if rows and rows[-1][k] > 0]
+            o = onset(rows, pressing) if pressing else None
+            if o is not None:
+                found.append(o)
+    onsets = f"{min(found):.3f}-{max(found):.3f}" if found else "—"
     lines = ["# Reproduction of the paper's experiments", "",
              "Generated by `python3 scripts/reproduce.py` from the runs in `results/paper/` (release build,",
              "jobs in `jobs/paper/`). Pressures are compared at the paper's final solid ratio when our run",
@@ -351,121 +394,27 @@ def report():
              "(`[remesh]` is off) to their target solid ratio (0.99, or the paper's final one where it is higher),",
              "with the barrier contact, the default since the barrier issue: no iterate crosses or inverts, and",
              "no job or study needs a stabilisation, contact-normal or retry key. What changed against the penalty",
-             "method these jobs used before (the earlier figures are in the git history of this file): section 4",
+             "method these jobs used before: section 4",
              "runs with the paper's friction mu = 0.1 instead of frictionless with viscous dashpots; every job and",
              "every study run reaches its target (with the penalty method the 6.1 sticking run failed at 0.715, and",
-             "two of the 6.2 runs jammed at 0.935 and 0.968); the pressure rise starts at 0.785-0.793 on 5.1.1 and",
-             "5.1.3, within the paper's 0.77-0.79 (0.72-0.73 before), and at 0.766 on 5.1.2, see its note; and near",
-             "full density the walls carry more than with the penalty method, whose overlaps counted as solid",
-             "(5.1.1 at 98.43 %: within 7 % of the paper, 9-12 % below it before). A step that would",
-             "pass the target solid ratio ends on it.",
-             "Ten changes since the regeneration before the last nine. (1) A node within the barrier's reach",
-             "of a corner of another particle feels one barrier instead of two (IPC's improved max approximator;",
-             "docs/robustness.md, fourteenth measurement): before, it felt both edges' barriers, twice the force",
-             "and a ridge whose round-off broke the regular grids' symmetry early. With one barrier the grids kept",
-             "their symmetric paths past the point where they lose stability and then snapped: the 6.2 run from",
-             "0.65 jammed at 0.9545 with the springs taking 16 % of the wall work, the 5.3 random arrangement",
-             "jammed at 0.9893 and the 5.3 checkerboard's springs took 1.89 % (fifteenth measurement). (2) A",
-             "converged step whose tangent is indefinite in the particles themselves (a saddle of the incremental",
-             "potential) is moved along a direction of negative curvature and solved again (sixteenth",
-             "measurement): the 6.2 run from 0.65 reached its target with the springs at 0.82 %. (3) With the",
-             "barrier a Newton solve got 50 iterations instead of 25 (seventeenth measurement): the grids' first",
-             "attempts got through where the particles slide into another arrangement, instead of failing into",
-             "retries and cut-backs that end in a snap; every paper job and study run reached its target, but the",
-             "5.3 checkerboard's springs took 1.27 % of the wall work. (4) 100 iterations instead of 50",
-             "(eighteenth measurement): that run was cut back where its particles rearrange, and its springs,",
-             "stiffened on the cut-back, held the grid until it snapped; with 100 it converges that step. Several",
-             "grids took other branches again: 5.1.1 was 5.3 % below and 0.2 % above the paper at 98.43 %, 5.1.3's",
-             "walls at 0.9937 were 388/417 MPa (25-49 % above the paper), and the asphalt grid of 5.2.1 (= 6.2 from",
-             "0.80 = 6.3 with 16 particles) became 33 % softer at 0.98. (5) The retry of a",
-             "failed step, which descends with four times the iterations, stops once its last 100 updates were",
-             "all cut short by the collision detection (nineteenth measurement; it let the 1,024-octagon grid",
-             "past its snap): 5.2.2 and the 6.1 mu = 0.1 run took other paths. (6) The regeneration before the",
-             "previous three: the barrier between particles is integrated along the edges, four Gauss points an edge against the",
-             "other particles' edges, the nodes keeping a term of their own that reaches d-hat/10 (twentieth",
-             "measurement), so that a uniform gap carries a uniform pressure: the contact patch test passes to",
-             "0.48 %, where the barrier on the nodes alone was off by 31 %. Every run but 6.3's single octagon",
-             "took another path: section 4 ended at its wall pressure at solid ratio 0.7733 in 164 steps (0.7947",
-             "in 267 before), 5.1.1 was 7.1 % and 0.4 % below the paper at 98.43 % (5.3 % below and 0.2 % above",
-             "before), 5.1.3's walls at 0.9937 moved by 2 % and less, the 5.2.x grids took 22, 22 and 13 steps with",
-             "one cut-back each and their walls at 0.99 moved by 1-4 %; the studies' spreads changed as their notes",
-             "say. (7) The regeneration before the previous two: the retry of a failed step, descending on the potential, got twenty",
-             "times `max_iterations` instead of four (twenty-first measurement: a regular grid's snap took one",
-             "descent of 1,228 iterations). Three runs, whose retries had run out of their 400 iterations, took",
-             "other paths: section 4 ended at its wall pressure at solid ratio 0.7803 in 122 steps (0.7733 in 164",
-             "before), the 6.1 mu = 0.1 run reached 0.99 in 39 steps instead of 53, and the 6.2 run from 0.65 in",
-             "as many steps on another path; their earlier figures are in the study notes. Every other run ended",
-             "with the same steps and figures as before (5.1.1's history.csv byte for byte). Every paper job and every",
-             "study run reached its target, the springs taking at most 0.009 % of the wall work in the paper jobs",
-             "(section 4; the others at most 0.006 %) and 0.021 % in the study runs. (8) The regeneration before the previous one: in the",
-             "barrier's Newton line search, a particle that an update rotates (its best-fit rotation about its",
-             "centroid above 1e-6 rad) is turned by that rotation exactly, a finite rotation, and the rest of its",
-             "update is taken along a straight line; before, it moved along the linearised rotation, which",
-             "stretched it by theta^2/2 against its bulk modulus, so that loose particles that must turn converged",
-             "very slowly (twenty-second measurement: robustness case 08 took 262-2,144 Newton iterations a step in",
-             "its loose phase, 23-214 after, and 4,216 in all instead of 18,008). Section 4 took 4,676 Newton",
-             "iterations instead of 30,148 (4,669 and 30,146 in that measurement). With the loose phase converging",
-             "along other paths, every run took another path but 6.3's one and four octagons (the same steps and",
-             "walls) and 5.2.3 (the same 13 steps, its walls within 0.2 % all along): section 4 ended at its wall",
-             "pressure at solid ratio 0.7766 in 145 steps with 38 cut-backs (0.7803 in 122 with 16 before), 5.1.1",
-             "was 0.4 % and 7.8 % above the paper at 98.43 % (7.1 % and 0.4 % below before), 5.1.2's top/bottom",
-             "walls 9.6 % above it at 0.9790 (9.3 %) in 39 steps (41), 5.1.3's walls at 0.9937 were 422.0/439.8 MPa",
-             "(395.3/416.0; 36-57 % above the paper, 28-48 % before) in 26 steps (25), and the walls of 5.2.1 and",
-             "5.2.2 at the paper's solid ratios moved by 1.3 % and less; in the studies the spreads moved as their",
-             "notes say (5.3's top wall at 0.98: 26 % instead of 19 %; the 6.1 sticking run 21 % above the",
-             "frictionless one at 0.90, 12 % before; 6.4's biaxial 13-14 % below lateral, 9 % before). Every paper",
-             "job and every study run still reached its target, the springs taking at most 0.024 % of the wall work",
-             "in the paper jobs (section 4; the others at most 0.011 %) and 0.013 % in the study runs. (9) The",
-             "previous regeneration: with the barrier contact (the default) the stabilisation springs were taken",
-             "out of the residual (ζ = 0; they were, with ζ = 1e-8, anchored where each step starts); a",
-             "regularisation ρ = 1e-8 of the elements' nodal stiffness is on the tangent's diagonal only, so a free",
-             "particle keeps the Newton system regular but the springs do no work: `stabilisation_energy` has been",
-             "exactly 0 in every run since. Every barrier step that converged at its size grows the next one (up to",
-             "`dt_max`), whatever its Newton iterations, and a Newton update's direct solve is accepted up to a",
-             "relative residual of 1e-3 (the two rules of the twenty-third measurement, reverted then for the",
-             "springs' share). The relative residual's reference force is at least 1e-2 E L (E the softest",
-             "particle's Young's modulus, L the square root of the particles' area), so that a packing that carries",
-             "no load yet is not held to round-off (twenty-fourth measurement). Every paper job and every study run",
-             "still reached its target, the springs' share of the wall work 0 in all of them. Every run but 6.3's",
-             "single octagon took another path: section 4 ended at its wall pressure at solid ratio 0.7675 in 49",
-             "steps with one cut-back and 1,920 Newton iterations (0.7766 in 145 with 38 and 4,676 before), 5.1.1",
-             "was 3.6 % below and 3.2 % above the paper at 98.43 % (0.4 % and 7.8 % above before), 5.1.2's",
-             "top/bottom walls 11.3 % above it at 0.9790 (9.6 %), 5.1.3's walls at 0.9937 were 398.2/425.2 MPa",
-             "(422.0/439.8; 28-52 % above the paper, 36-57 % before) in 25 steps (26), and the left/right and",
-             "bottom/top walls at the paper's final solid ratios were 255.6/217.0 MPa for 5.2.1 (199.4/176.3),",
-             "173.7/210.1 for 5.2.2 (182.2/204.9) and 209.3/201.8 for 5.2.3 (216.1, four equal walls) in 12 steps",
-             "(13). Near full density these regular grids' pressures depend on the sequence of steps: in an earlier",
-             "step-size study (docs/robustness.md, twenty-third measurement, with the springs still in the",
-             "residual) fixed steps of 0.5, 0.25, 0.125 and 0.0625 s gave 351.2, 379.6, 343.4 and 355.7 MPa on",
-             "5.1.3's left/right walls at 0.9937 and 199.9, 210.9, 211.6 and 269.5 MPa on 5.2.1's at 0.9914, by up",
-             "to a third apart and not converging as the step falls: the path scatter of a grid past its loss of",
-             "stability, not an error of the step size. In the studies the spreads and orderings moved as their",
-             "notes say (6.1: friction raised the pressing walls at 0.90, 0.95 and 0.98, at 0.98 it had lowered them",
-             "before; 6.2: the start from 0.80 was the stiffest at 0.95 and 0.98, the softest before; 6.3: the more",
-             "particles the stiffer at 0.98, 16 the softest before; 6.4: biaxial 14-15 % above vertical and 8-10 %",
-             "below lateral, 5-7 % and 13-14 % before). (10) This regeneration: the barrier's descent now projects",
-             "the pairs' Hessians onto the positive semi-definite matrices before it shifts the diagonal (before:",
-             "small shifts first), a pair's Hessian is projected on the complement of its translations, and the",
-             "pattern grows by every pair within d̂ + h (docs/robustness.md, twenty-fifth measurement). These",
-             "change only the Newton path (the order in which an indefinite tangent is made definite), not the",
-             "physics, so the regular grids near full density and the random packings take other paths. Every",
-             "paper job and every study run still reaches its target, the springs' share of the wall work 0 in all",
-             "of them. Every run but 6.3's one, four and nine octagons (the same steps and walls to the table's",
-             "digits) took another path: section 4 ends at its wall pressure at solid ratio 0.7726 in 50 steps with",
-             "one cut-back and 1,389 Newton iterations (0.7675 in 49 with one and 1,920 before), 5.1.1 is 6.6 %",
-             "below and 0.7 % above the paper at 98.43 % (3.6 % below and 3.2 % above before), 5.1.2's top/bottom",
-             "walls 11.7 % above it at 0.9790 (11.3 %), its pressure rising from 0.766 without the jam it had from",
-             "0.748, 5.1.3's walls at 0.9937 are 364.0/390.6 MPa (398.2/425.2; 17-39 % above the paper, 28-52 %",
-             "before) in 25 steps (25), and the left/right and bottom/top walls at the paper's final solid ratios",
-             "are 198.7/176.1 MPa for 5.2.1 (255.6/217.0) in 21 steps (22), 181.8/204.5 for 5.2.2 (173.7/210.1),",
-             "which now follows 5.2.1 with its walls swapped up to 0.986, and 217.7/212.6 for 5.2.3 (209.3/201.8)",
-             "in 12 steps (12). In the studies the spreads and orderings moved as their notes say (5.3: the random",
-             "arrangement still the stiffest at 0.95 and 0.98, the columns now the softest at 0.95; 6.1: friction",
-             "raises the pressing walls at 0.90, 0.95 and 0.98 by 4-26 %, mu = 0.2 the stiffest at all three;",
-             "6.2: the start from 0.80 is the softest at 0.95 and 0.98, the stiffest before; 6.3: 16 octagons 20 %",
-             "softer than one at 0.98, 14 % stiffer before; 6.4: biaxial 37 % and 14 % above vertical at 0.95 and",
-             "0.98 and 8-11 % below lateral, 15 % and 14 % and 8-10 % before). The earlier",
-             "figures are in the notes and in the git history of this file.", ""]
+             f"two of the 6.2 runs jammed at 0.935 and 0.968); the pressure rise starts at {onsets} on the aluminium",
+             "grids of 5.1 (the paper: 0.77-0.79; the penalty method: 0.72-0.73, its overlaps counting as solid);",
+             "and near full density the walls carry more than with the penalty method. A step that would pass the",
+             "target solid ratio ends on it. The notes under each table quote its figures, computed from the runs",
+             "(`scripts/reproduce.py`); what they say of earlier versions of this file is history.",
+             "",
+             "This regeneration (2026-12-07) is the first after the one of 2026-12-05 (e80241f). The barrier's",
+             "Newton path has changed since, not its physics: the update taken twice over at a",
+             "double root (docs/robustness.md, twenty-seventh measurement), an edge point's Hessian projected on",
+             "its range and a Verlet list for the search and the collision detection (twenty-eighth), the lagged",
+             "friction's cycles ended (twenty-ninth), each step started with the particles carried by the walls'",
+             "box (thirtieth), and an indefinite tangent factored by the unpivoted LDLT before the pivoted one",
+             "(docs/performance.md). Every paper job and study run still reaches its target with the springs",
+             "doing no work. Every run but 6.3's one and four octagons took another path: the regular grids'",
+             "pressures near full density moved within their known path scatter (5.1.3 and the 6.x studies' notes",
+             "give the earlier ranges), and several orderings of the studies changed (6.1's friction now raises the",
+             "pressing walls at 0.98 only, within the scatter). The figures of every earlier version, with what",
+             "changed in each, are in the git history of this file.", ""]
     lines += section4()
     for job, p in PAPER.items():
         path = os.path.join(OUT, job, "summary.json")
@@ -507,8 +456,8 @@ def report():
             h = fits["heckel"]
             lines.append(f"| Heckel K (1/MPa), R² (not in the paper) | — | {h['k']:.3e}, {h['r2']:.3f} |")
         lines.append("")
-        if note:
-            lines += [note, ""]
+        if note and rows:
+            lines += [note(rows, s), ""]
     # the studies of section 6 that have been run (mpfem study jobs/studies/X.toml --out results/studies/X)
     studies = os.path.join(ROOT, "results", "studies")
     if os.path.isdir(studies):
@@ -523,7 +472,9 @@ def report():
             lines.append("")
             lines += study_trends(os.path.join(studies, name))
             if name in STUDY_NOTES:
-                lines += [STUDY_NOTES[name], ""]
+                text = STUDY_NOTES[name](runs_of(os.path.join(studies, name)))
+                if text:
+                    lines += [text, ""]
     lines += volume_table()
     with open(os.path.join(ROOT, "REPRODUCTION.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
