@@ -212,7 +212,17 @@ def spread(vals):
     return 100 * (max(v) / min(v) - 1)
 
 
+def complete(runs, phis=(0.90, 0.95, 0.98)):
+    """Whether every run of a study got to each solid ratio of `phis` (its note compares them there)."""
+    return bool(runs) and all(mean_at(rows, phi, LR + BT) is not None for _, rows, _ in runs for phi in phis)
+
+
+INCOMPLETE = "Not every run got to solid ratio 0.98, where this note compares them: see the tables above."
+
+
 def study_5_3(runs):
+    if not complete(runs):
+        return INCOMPLETE
     labels = [l for l, _, _ in runs]
     parts = []
     for phi in (0.90, 0.95, 0.98):
@@ -232,6 +242,8 @@ def study_5_3(runs):
 
 
 def study_6_1(runs):
+    if not complete(runs):
+        return INCOMPLETE
     labels = [l for l, _, _ in runs]
     parts, signs = [], []
     for phi in (0.90, 0.95, 0.98):
@@ -253,6 +265,8 @@ def study_6_1(runs):
 
 
 def study_6_2(runs):
+    if not complete(runs):
+        return INCOMPLETE
     labels = [l.replace("phi0_", "") for l, _, _ in runs]
     parts = [f"{listing(values(runs, phi, LR))} MPa at {phi:.2f}" for phi in (0.90, 0.95, 0.98)]
     steps = [len(rows) for _, rows, _ in runs]
@@ -277,6 +291,8 @@ def study_6_2(runs):
 
 
 def study_6_3(runs):
+    if not complete(runs):
+        return INCOMPLETE
     labels = [l.replace("n", "") for l, _, _ in runs]
     v90, v95, v98 = (values(runs, phi, LR) for phi in (0.90, 0.95, 0.98))
     rel98 = ", ".join(f"{100 * (x / v98[0] - 1):+.0f} %" for x in v98[1:])
@@ -293,8 +309,8 @@ def study_6_3(runs):
 def study_6_4(runs):
     v = {label: (mean_at(rows, 0.95, LR), mean_at(rows, 0.98, LR)) for label, rows, _ in runs}
     lat, ver, bia = v.get("lateral"), v.get("vertical"), v.get("biaxial")
-    if not (lat and ver and bia):
-        return ""
+    if not (lat and ver and bia) or None in lat + ver + bia:
+        return INCOMPLETE
     def cmp(a, b):
         return f"{100 * (a[0] / b[0] - 1):+.0f} % and {100 * (a[1] / b[1] - 1):+.0f} %"
     above_v = bia[0] > ver[0] and bia[1] > ver[1]
@@ -456,7 +472,7 @@ def report():
             h = fits["heckel"]
             lines.append(f"| Heckel K (1/MPa), R² (not in the paper) | — | {h['k']:.3e}, {h['r2']:.3f} |")
         lines.append("")
-        if note and rows:
+        if note and rows and reached:
             lines += [note(rows, s), ""]
     # the studies of section 6 that have been run (mpfem study jobs/studies/X.toml --out results/studies/X)
     studies = os.path.join(ROOT, "results", "studies")
