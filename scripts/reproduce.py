@@ -119,8 +119,7 @@ CORNERS = ("With the barrier contact, the default, the octagon grids need no con
 
 
 def asphalt_onset(rows):
-    pressing = [k for k in ["p_left", "p_right", "p_bottom", "p_top"] if rows[-1][k] > 0]
-    o = onset(rows, pressing)
+    o = onset(rows, pressing_walls(rows))
     return f" The pressure starts to rise at {o:.3f}, against the paper's 0.86."
 
 
@@ -380,6 +379,11 @@ def at(rows, phi, key):
     return None
 
 
+def pressing_walls(rows):
+    """The pressure columns of the walls that carry load at the end of a run."""
+    return [k for k in ["p_left", "p_right", "p_bottom", "p_top"] if rows and rows[-1][k] > 0]
+
+
 def onset(rows, keys):
     """Solid ratio where the mean pressure of `keys` first exceeds 5 % of its last value."""
     last = sum(rows[-1][k] for k in keys) / len(keys)
@@ -398,7 +402,7 @@ def report():
     for job in ("5_1_1_aluminium_lateral", "5_1_2_aluminium_vertical", "5_1_3_aluminium_biaxial"):
         if os.path.exists(os.path.join(OUT, job, "history.csv")):
             rows = history(job)
-            pressing = [k for k in ["p_left", "p_right", "p_bottom", "p_top"] if rows and rows[-1][k] > 0]
+            pressing = pressing_walls(rows)
             o = onset(rows, pressing) if pressing else None
             if o is not None:
                 found.append(o)
@@ -463,7 +467,7 @@ def report():
             lines.append(f"| p {name} at φ = {where:.4f}{star} (MPa) | {value} | {fmt(ours)}{rel} |")
         vol = at(rows, where, "volume_error") if reached else fin.get("volume_error")
         lines.append(f"| volume error | ≈ 0.6 % | {fmt(None if vol is None else 100 * vol, '.2f')} % |")
-        pressing = [k for k in ["p_left", "p_right", "p_bottom", "p_top"] if rows and rows[-1][k] > 0]
+        pressing = pressing_walls(rows)
         lines.append(f"| pressure starts to rise near φ | {p['onset']} | {fmt(onset(rows, pressing) if pressing else None, '.3f')} |")
         lines.append(f"| time to the end (s) / steps | {p['time']} / {p['steps'] or '—'} | {rows[-1]['time']:.1f} / {len(rows)} |")
         note = NOTES.get(job)
@@ -536,17 +540,7 @@ TREND_PHI = (0.85, 0.90, 0.95, 0.98)
 def study_trends(d):
     """Mean left/right and bottom/top pressures of every run of a study at common solid ratios
     (the curves compared where they all exist, not at each run's own end)."""
-    runs = []
-    order = sorted(os.listdir(d))
-    table = os.path.join(d, "study.csv")
-    if os.path.exists(table):  # the study's own order of its runs
-        with open(table) as f:
-            order = [r["label"] for r in csv.DictReader(f)]
-    for label in order:
-        path = os.path.join(d, label, "history.csv")
-        if os.path.exists(path):
-            with open(path) as f:
-                runs.append((label, [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]))
+    runs = [(label, rows) for label, rows, _ in runs_of(d)]
     if not runs:
         return []
     head = " | ".join(f"φ = {phi:.2f}" for phi in TREND_PHI)
@@ -555,12 +549,8 @@ def study_trends(d):
     for label, rows in runs:
         cells = []
         for phi in TREND_PHI:
-            lr = [at(rows, phi, k) for k in ("p_left", "p_right")]
-            bt = [at(rows, phi, k) for k in ("p_bottom", "p_top")]
-            if None in lr or None in bt:
-                cells.append("—")
-            else:
-                cells.append(f"{sum(lr) / 2:.1f} ; {sum(bt) / 2:.1f}")
+            lr, bt = mean_at(rows, phi, LR), mean_at(rows, phi, BT)
+            cells.append("—" if lr is None or bt is None else f"{lr:.1f} ; {bt:.1f}")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines + [""]
 
