@@ -111,20 +111,20 @@ fn gb_of(f: &hdf5::File, s: &str) -> hdf5::Group {
     f.group(&format!("steps/{s}")).unwrap()
 }
 
-/// 2 × 2 discs, lateral, frictionless (34 steps, 4 cut-backs), a checkpoint every 12 steps:
-/// the last one is at step 24. Its folder copied (history and results run on to step 34, as
+/// 2 × 2 discs, lateral, frictionless (36 steps, 5 cut-backs), a checkpoint every 15 steps:
+/// the last one is at step 30. Its folder copied (history and results run on to step 36, as
 /// after a kill) and restarted in place, and restarted into a fresh folder: both equal the
 /// uninterrupted run bit for bit.
 #[test]
 fn restart_from_a_periodic_checkpoint_is_bit_for_bit() {
     let dir = tmpdir("periodic");
-    let case = case_from("jobs/compaction/discs_2x2_lateral.toml", &dir, "[output]\ncheckpoint_every = 12\ncheckpoint_minutes = 0\n");
+    let case = case_from("jobs/compaction/discs_2x2_lateral.toml", &dir, "[output]\ncheckpoint_every = 15\ncheckpoint_minutes = 0\n");
     let a = dir.join("a");
     let err = run_ok(&case, &a, &[]);
     let lines = history_lines(&a);
-    assert_eq!(lines.len() - 1, 34, "the job's 34 steps");
-    assert_eq!(mpfem::h5::open(&a.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap().len(), 34, "one output step per step");
-    assert_eq!(checkpoint_step(&a), 24);
+    assert_eq!(lines.len() - 1, 36, "the job's 36 steps");
+    assert_eq!(mpfem::h5::open(&a.join("results.h5")).unwrap().group("steps").unwrap().member_names().unwrap().len(), 36, "one output step per step");
+    assert_eq!(checkpoint_step(&a), 30);
     assert_eq!(err.matches("mpfem: checkpoint at step").count(), 2, "one line per checkpoint: {err}");
     assert!(!a.join("checkpoint.h5.tmp").exists());
 
@@ -132,10 +132,10 @@ fn restart_from_a_periodic_checkpoint_is_bit_for_bit() {
     let b = dir.join("b");
     copy_dir(&a, &b);
     let err = run_ok(&case, &b, &["--restart", b.to_str().unwrap()]);
-    assert!(err.contains("restarting from") && err.contains("at step 24"), "{err}");
+    assert!(err.contains("restarting from") && err.contains("at step 30"), "{err}");
     assert_same_run(&a, &b);
     let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(b.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(s["restarts"][0]["step"], 24);
+    assert_eq!(s["restarts"][0]["step"], 30);
 
     // into another folder: history and results are carried over from the checkpoint's folder
     let c = dir.join("c");

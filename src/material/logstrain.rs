@@ -31,9 +31,11 @@
 //! L is the derivative of the isotropic tensor function ln: in the eigenbasis of b, the
 //! component (i, j) of L : δb equals f⁽¹⁾(λᵢ, λⱼ) δb′ᵢⱼ with the divided difference
 //! f⁽¹⁾(λᵢ, λⱼ) = (ln λᵢ − ln λⱼ)/(λᵢ − λⱼ), and its limit 1/λᵢ for equal eigenvalues
-//! (see [`log_divided_difference`]). `cc` is built column by column from the three symmetric
-//! basis velocity gradients l = e_xx, l = e_yy and l_xy = l_yx = ½ (the column 2 d_xy = 1).
-//! For an isotropic law the skew part of l drops out exactly (objectivity).
+//! (see [`log_divided_difference`]). For an isotropic law the skew part of l drops out exactly
+//! (objectivity), and τ′ and D are coaxial with b, so `cc` is formed in the eigenbasis of b,
+//! where it is a 2 × 2 block on the normal components and one shear entry, and turned to x, y
+//! ([`spatial_tangent`]; a unit test checks it against the column-by-column evaluation of the
+//! formula above on the basis velocity gradients l = e_xx, e_yy and l_xy = l_yx = ½).
 // `!(x > 0.0)` is used on purpose: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -136,18 +138,26 @@ pub struct Spectral {
 }
 
 impl Spectral {
-    /// Closed-form eigen-decomposition (θ = ½ atan2(t_xy, ½(t_xx − t_yy)), θ = 0 when the
-    /// in-plane eigenvalues coincide).
+    /// Closed-form eigen-decomposition: θ = ½ atan2(t_xy, ½(t_xx − t_yy)) ∈ (−π/2, π/2]
+    /// (θ = 0 when the in-plane eigenvalues coincide), its cosine and sine taken from
+    /// cos 2θ = ½(t_xx − t_yy)/r and sin 2θ = t_xy/r by the half-angle formulas, each where
+    /// it has no cancellation (cos θ ≥ 1/√2 when t_xx ≥ t_yy, |sin θ| > 1/√2 otherwise). No
+    /// trigonometric call: they were a third of the law's time (docs/performance.md).
     pub fn of(t: &Sym4) -> Self {
         let m = 0.5 * (t[0] + t[1]);
         let half_diff = 0.5 * (t[0] - t[1]);
-        let r = half_diff.hypot(t[2]);
-        let theta = 0.5 * t[2].atan2(half_diff);
-        Self {
-            lam: [m + r, m - r, t[3]],
-            cos: theta.cos(),
-            sin: theta.sin(),
-        }
+        // (the components are strains or stretches of order one: no overflow to guard against)
+        let r = (half_diff * half_diff + t[2] * t[2]).sqrt();
+        let (cos, sin) = if !(r > 0.0) {
+            (1.0, 0.0)
+        } else if half_diff >= 0.0 {
+            let c = ((r + half_diff) / (2.0 * r)).sqrt();
+            (c, t[2] / (2.0 * r * c))
+        } else {
+            let s = ((r - half_diff) / (2.0 * r)).sqrt().copysign(t[2]);
+            (t[2] / (2.0 * r * s), s)
+        };
+        Self { lam: [m + r, m - r, t[3]], cos, sin }
     }
 
     /// Components of `t` in the eigenbasis: `[t′₁₁, t′₂₂, t′₁₂, t_zz]` (t′ = Rᵀ t R).
@@ -214,15 +224,15 @@ pub fn hencky_strain(b: &Sym4) -> Sym4 {
 /// ```
 ///
 /// H = dq/dΔγ at the converged point (hardening slope, or the effective creep slope).
-/// Elastic: D = 2G I_dev.
+/// Elastic: D = 2G I_dev. N̂ is coaxial with b^tr and kept as its principal values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DevTangent {
     /// 2G (1 − 3GΔγ/q_tr).
     pub two_g_beta: f64,
     /// 6G² (Δγ/q_tr − 1/(3G + H)).
     pub coef_nn: f64,
-    /// N̂ = s_tr/‖s_tr‖ (zero when elastic).
-    pub n_hat: Sym4,
+    /// N̂'s principal values `[n₁, n₂, n₃]` in the eigenbasis of b^tr (zero when elastic).
+    pub n_hat: [f64; 3],
 }
 
 impl DevTangent {
@@ -231,46 +241,44 @@ impl DevTangent {
         Self {
             two_g_beta: 2.0 * g,
             coef_nn: 0.0,
-            n_hat: [0.0; 4],
+            n_hat: [0.0; 3],
         }
-    }
-
-    /// D : dε.
-    #[inline]
-    pub fn apply(&self, de: &Sym4) -> Sym4 {
-        let d = dev(de);
-        let nn = self.coef_nn * ddot(&self.n_hat, de);
-        let mut out = [0.0; 4];
-        for i in 0..4 {
-            out[i] = self.two_g_beta * d[i] + nn * self.n_hat[i];
-        }
-        out
     }
 }
 
 /// Spatial tangent `cc` (rows τ′ `[xx, yy, xy]`, columns `[d_xx, d_yy, 2 d_xy]`) from the
-/// decomposition of b^tr, b^tr itself, the stress τ′ and the return-map tangent D:
-/// column j = D : ½ L : (l_j b + b l_jᵀ) − (l_j τ′ + τ′ l_jᵀ) for the basis l_j (module docs).
-pub fn spatial_tangent(sp: &Spectral, b: &Sym4, tau: &Sym4, d: &DevTangent) -> [[f64; 3]; 3] {
-    let bm = to_m2(b);
-    let tm = to_m2(tau);
-    let basis = [
-        Matrix2::new(1.0, 0.0, 0.0, 0.0),
-        Matrix2::new(0.0, 0.0, 0.0, 1.0),
-        Matrix2::new(0.0, 0.5, 0.5, 0.0),
-    ];
-    let mut cc = [[0.0; 3]; 3];
-    for (j, l) in basis.iter().enumerate() {
-        let db = l * bm + bm * l.transpose();
-        let dlog = sp.dlog(&[db[(0, 0)], db[(1, 1)], db[(0, 1)], 0.0]);
-        let de = [0.5 * dlog[0], 0.5 * dlog[1], 0.5 * dlog[2], 0.5 * dlog[3]];
-        let a = d.apply(&de);
-        let lie = l * tm + tm * l.transpose();
-        cc[0][j] = a[0] - lie[(0, 0)];
-        cc[1][j] = a[1] - lie[(1, 1)];
-        cc[2][j] = a[2] - lie[(0, 1)];
+/// decomposition of b^tr, the principal values `tau` of the stress τ′ (coaxial with b^tr) and
+/// the return-map tangent D: cc : d = D : ½ L : (d b + b d) − (d τ′ + τ′ d) (module docs).
+///
+/// Formed in the eigenbasis of b^tr, where b = diag(λ₁, λ₂), τ′ and N̂ are diagonal: for a
+/// symmetric d there, ½ L : (d b + b d) has the normal components d₁₁, d₂₂ and the shear
+/// ½ f⁽¹⁾(λ₁, λ₂)(λ₁ + λ₂) d₁₂, so the tangent is a 2 × 2 block on the normal components,
+/// ```text
+///   c₁₁ = ⅔ 2Gβ + k n₁² − 2τ₁,   c₂₂ = ⅔ 2Gβ + k n₂² − 2τ₂,   c₁₂ = −⅓ 2Gβ + k n₁ n₂,
+/// ```
+/// (k = 6G²(Δγ/q_tr − 1/(3G + H))) and the shear entry ½(½ 2Gβ f⁽¹⁾ (λ₁ + λ₂) − (τ₁ + τ₂)) per
+/// engineering shear; then turned to x, y by the congruence with the strain's rotation.
+pub fn spatial_tangent(sp: &Spectral, tau: &[f64; 3], d: &DevTangent) -> [[f64; 3]; 3] {
+    let [l1, l2, _] = sp.lam;
+    let (gb, k) = (d.two_g_beta, d.coef_nn);
+    let [n1, n2, _] = d.n_hat;
+    let a00 = 2.0 / 3.0 * gb + k * n1 * n1 - 2.0 * tau[0];
+    let a11 = 2.0 / 3.0 * gb + k * n2 * n2 - 2.0 * tau[1];
+    let a01 = -gb / 3.0 + k * n1 * n2;
+    let g = 0.5 * (0.5 * gb * log_divided_difference(l1, l2) * (l1 + l2) - (tau[0] + tau[1]));
+    // rows of the map from [d_xx, d_yy, 2 d_xy] to the eigenbasis's [d₁₁, d₂₂, 2 d₁₂]
+    let (c, s) = (sp.cos, sp.sin);
+    let (cc, ss, cs) = (c * c, s * s, c * s);
+    let e1 = [cc, ss, cs];
+    let e2 = [ss, cc, -cs];
+    let e3 = [-2.0 * cs, 2.0 * cs, cc - ss];
+    let mut out = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            out[i][j] = a00 * e1[i] * e1[j] + a01 * (e1[i] * e2[j] + e2[i] * e1[j]) + a11 * e2[i] * e2[j] + g * e3[i] * e3[j];
+        }
     }
-    cc
+    out
 }
 
 /// Outcome of [`exponential_map_update`].
@@ -334,7 +342,7 @@ where
     if !(dgamma > 0.0) || !(q_tr > 0.0) {
         let tau = sp.compose(s_tr);
         let d = DevTangent::elastic(g);
-        let cc = spatial_tangent(&sp, &b, &tau, &d);
+        let cc = spatial_tangent(&sp, &s_tr, &d);
         return Ok(ReturnOutcome {
             tau,
             cc,
@@ -356,7 +364,7 @@ where
     let be = sp.compose(be_p);
     let cp_new = cp_inv_from_be(ff, &be);
 
-    let n_hat = sp.compose([s_tr[0] / norm_s, s_tr[1] / norm_s, s_tr[2] / norm_s]);
+    let n_hat = [s_tr[0] / norm_s, s_tr[1] / norm_s, s_tr[2] / norm_s];
     let inv_3g_h = if h.is_finite() {
         1.0 / (3.0 * g + h)
     } else {
@@ -367,7 +375,7 @@ where
         coef_nn: 6.0 * g * g * (dgamma / q_tr - inv_3g_h),
         n_hat,
     };
-    let cc = spatial_tangent(&sp, &b, &tau, &d);
+    let cc = spatial_tangent(&sp, &s, &d);
     Ok(ReturnOutcome {
         tau,
         cc,
@@ -415,5 +423,94 @@ mod tests {
             );
         }
         assert_eq!(log_divided_difference(l2, l2), 1.0 / l2);
+    }
+
+    /// A small deterministic generator of values in [−1, 1) for the sweeps below.
+    fn sweep(n: usize) -> impl Iterator<Item = f64> {
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        (0..n).map(move |_| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            2.0 * ((seed >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+        })
+    }
+
+    #[test]
+    fn eigenvectors_by_half_angles_are_those_of_atan2() {
+        // Reference: θ = ½ atan2(t_xy, ½(t_xx − t_yy)), cos θ and sin θ by libm (the former
+        // implementation); tolerance 4 ulp of one. Includes every sign of the shear with
+        // t_xx above, equal to and below t_yy, and the coincident eigenvalues.
+        let mut cases: Vec<Sym4> = vec![[1.0, 1.0, 0.0, 1.0], [2.0, 1.0, 0.0, 1.0], [1.0, 2.0, 0.0, 1.0], [1.0, 2.0, -0.0, 1.0], [1.5, 1.5, 0.2, 1.0], [1.5, 1.5, -0.2, 1.0], [1.0, 1.0 + 1e-12, 1e-13, 1.0]];
+        let v: Vec<f64> = sweep(3000).collect();
+        cases.extend(v.chunks(3).map(|c| [1.0 + 0.5 * c[0], 1.0 + 0.5 * c[1], 0.5 * c[2], 1.0]));
+        for t in cases {
+            let sp = Spectral::of(&t);
+            let theta = 0.5 * t[2].atan2(0.5 * (t[0] - t[1]));
+            let (c, s) = if t[0] == t[1] && t[2] == 0.0 { (1.0, 0.0) } else { (theta.cos(), theta.sin()) };
+            assert!((sp.cos - c).abs() <= 4.0 * f64::EPSILON && (sp.sin - s).abs() <= 4.0 * f64::EPSILON, "{t:?}: ({}, {}) against ({c}, {s})", sp.cos, sp.sin);
+            assert!((sp.cos * sp.cos + sp.sin * sp.sin - 1.0).abs() <= 4.0 * f64::EPSILON);
+            // t n₁ = λ₁ n₁ and t n₂ = λ₂ n₂
+            let (n1, n2) = ([sp.cos, sp.sin], [-sp.sin, sp.cos]);
+            for (n, l) in [(n1, sp.lam[0]), (n2, sp.lam[1])] {
+                let tn = [t[0] * n[0] + t[2] * n[1], t[2] * n[0] + t[1] * n[1]];
+                assert!((tn[0] - l * n[0]).abs() <= 1e-14 && (tn[1] - l * n[1]).abs() <= 1e-14, "{t:?}");
+            }
+        }
+    }
+
+    /// The spatial tangent evaluated as the module docs define it, column by column on the
+    /// basis velocity gradients (the former implementation): A = D : ½ L : (l b + b lᵀ) minus
+    /// the Lie terms l τ′ + τ′ lᵀ.
+    fn tangent_by_columns(sp: &Spectral, b: &Sym4, tau: &Sym4, d: &DevTangent) -> [[f64; 3]; 3] {
+        let n = sp.compose(d.n_hat);
+        let basis: [Sym4; 3] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.5, 0.0]];
+        let mut cc = [[0.0; 3]; 3];
+        for (j, l) in basis.iter().enumerate() {
+            // l is symmetric here: l b + b l and l τ′ + τ′ l in [xx, yy, xy] components
+            let sym = |a: &Sym4| [2.0 * (l[0] * a[0] + l[2] * a[2]), 2.0 * (l[2] * a[2] + l[1] * a[1]), l[0] * a[2] + l[2] * a[1] + a[0] * l[2] + a[2] * l[1], 0.0];
+            let dl = sp.dlog(&sym(b));
+            let de = [0.5 * dl[0], 0.5 * dl[1], 0.5 * dl[2], 0.5 * dl[3]];
+            let dv = dev(&de);
+            let nn = d.coef_nn * ddot(&n, &de);
+            let lie = sym(tau);
+            for i in 0..3 {
+                cc[i][j] = d.two_g_beta * dv[i] + nn * n[i] - lie[i];
+            }
+        }
+        cc
+    }
+
+    #[test]
+    fn the_tangent_in_the_eigenbasis_is_the_tangent_by_columns() {
+        // Elastic and plastic return tangents at stretched, sheared and rotated b, including
+        // coincident in-plane eigenvalues; tolerance 1e-12 of the largest entry (round-off).
+        let v: Vec<f64> = sweep(4000).collect();
+        let mut bs: Vec<Sym4> = vec![[1.0, 1.0, 0.0, 1.0], [1.2, 1.2, 0.0, 0.7], [0.8, 0.8 + 1e-9, 0.0, 1.1]];
+        bs.extend(v.chunks(4).map(|c| [1.0 + 0.6 * c[0], 1.0 + 0.6 * c[1], 0.3 * c[2], 1.0 + 0.3 * c[3]]));
+        for (k, b) in bs.iter().enumerate() {
+            let sp = Spectral::of(b);
+            let g = 26_000.0;
+            let eps = sp.lam.map(|l| 0.5 * l.ln());
+            let m = (eps[0] + eps[1] + eps[2]) / 3.0;
+            let s_tr = eps.map(|e| 2.0 * g * (e - m));
+            let norm = (s_tr.iter().map(|x| x * x).sum::<f64>()).sqrt().max(1e-300);
+            let plastic = k % 2 == 1;
+            let (beta, d) = if plastic {
+                let beta = 0.6;
+                (beta, DevTangent { two_g_beta: 2.0 * g * beta, coef_nn: 6.0 * g * g * (0.4 / (3.0 * g) - 1.0 / (3.0 * g + 500.0)), n_hat: s_tr.map(|x| x / norm) })
+            } else {
+                (1.0, DevTangent::elastic(g))
+            };
+            let tau_p = s_tr.map(|x| beta * x);
+            let fast = spatial_tangent(&sp, &tau_p, &d);
+            let slow = tangent_by_columns(&sp, b, &sp.compose(tau_p), &d);
+            let scale = slow.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!((fast[i][j] - slow[i][j]).abs() <= 1e-12 * scale, "b = {b:?} ({i}, {j}): {} against {}", fast[i][j], slow[i][j]);
+                }
+            }
+        }
     }
 }
