@@ -261,6 +261,14 @@ mod imp {
                 }
                 ksp.set_two_level(&p, &space.blocks, self.symmetric).map_err(err)?;
             } else {
+                // room for the delayed pivots of an indefinite tangent (a saddle, the descent's
+                // probe) unless the options say otherwise: with MUMPS's own margin of its
+                // estimated workspace its factorisation ran out of it (INFOG(1) = −9, PETSc's
+                // PC_FACTOR_OUTMEMORY) on 4 ranks of tests/mpi_parts_run.rs's 3 × 3 discs in one
+                // run of the CI, at every step size down to `dt_min`; the margin changes no result
+                if !petsc::has_option("-mat_mumps_icntl_14").map_err(err)? {
+                    petsc::insert_options("-mat_mumps_icntl_14 100").map_err(err)?;
+                }
                 ksp.set_defaults("preonly", pc, Some("mumps"), self.rtol, self.max_iterations).map_err(err)?;
             }
             ksp.set_operator(&m).map_err(err)?;
