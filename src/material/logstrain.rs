@@ -160,20 +160,7 @@ impl Spectral {
         Self { lam: [m + r, m - r, t[3]], cos, sin }
     }
 
-    /// Components of `t` in the eigenbasis: `[t′₁₁, t′₂₂, t′₁₂, t_zz]` (t′ = Rᵀ t R).
-    #[inline]
-    pub fn to_principal(&self, t: &Sym4) -> Sym4 {
-        let (c, s) = (self.cos, self.sin);
-        let (cc, ss, cs) = (c * c, s * s, c * s);
-        [
-            cc * t[0] + 2.0 * cs * t[2] + ss * t[1],
-            ss * t[0] - 2.0 * cs * t[2] + cc * t[1],
-            cs * (t[1] - t[0]) + (cc - ss) * t[2],
-            t[3],
-        ]
-    }
-
-    /// Inverse of [`Spectral::to_principal`]: t = R t′ Rᵀ from `[t′₁₁, t′₂₂, t′₁₂, t_zz]`.
+    /// t = R t′ Rᵀ from its components in the eigenbasis, `[t′₁₁, t′₂₂, t′₁₂, t_zz]`.
     #[inline]
     pub fn from_principal(&self, p: &Sym4) -> Sym4 {
         let (c, s) = (self.cos, self.sin);
@@ -190,19 +177,6 @@ impl Spectral {
     #[inline]
     pub fn compose(&self, v: [f64; 3]) -> Sym4 {
         self.from_principal(&[v[0], v[1], 0.0, v[2]])
-    }
-
-    /// L : δb, the directional derivative of ln b (b the decomposed tensor, all λ > 0).
-    pub fn dlog(&self, db: &Sym4) -> Sym4 {
-        let p = self.to_principal(db);
-        let [l1, l2, l3] = self.lam;
-        let q = [
-            p[0] / l1,
-            p[1] / l2,
-            log_divided_difference(l1, l2) * p[2],
-            p[3] / l3,
-        ];
-        self.from_principal(&q)
     }
 }
 
@@ -459,6 +433,21 @@ mod tests {
         }
     }
 
+    /// Components of `t` in the eigenbasis of `sp`: `[t′₁₁, t′₂₂, t′₁₂, t_zz]` (t′ = Rᵀ t R).
+    fn to_principal(sp: &Spectral, t: &Sym4) -> Sym4 {
+        let (c, s) = (sp.cos, sp.sin);
+        let (cc, ss, cs) = (c * c, s * s, c * s);
+        [cc * t[0] + 2.0 * cs * t[2] + ss * t[1], ss * t[0] - 2.0 * cs * t[2] + cc * t[1], cs * (t[1] - t[0]) + (cc - ss) * t[2], t[3]]
+    }
+
+    /// L : δb, the directional derivative of ln b (b the tensor `sp` decomposes, all λ > 0):
+    /// f⁽¹⁾(λᵢ, λⱼ) δb′ᵢⱼ in the eigenbasis (module docs).
+    fn dlog(sp: &Spectral, db: &Sym4) -> Sym4 {
+        let p = to_principal(sp, db);
+        let [l1, l2, l3] = sp.lam;
+        sp.from_principal(&[p[0] / l1, p[1] / l2, log_divided_difference(l1, l2) * p[2], p[3] / l3])
+    }
+
     /// The spatial tangent evaluated as the module docs define it, column by column on the
     /// basis velocity gradients (the former implementation): A = D : ½ L : (l b + b lᵀ) minus
     /// the Lie terms l τ′ + τ′ lᵀ.
@@ -469,7 +458,7 @@ mod tests {
         for (j, l) in basis.iter().enumerate() {
             // l is symmetric here: l b + b l and l τ′ + τ′ l in [xx, yy, xy] components
             let sym = |a: &Sym4| [2.0 * (l[0] * a[0] + l[2] * a[2]), 2.0 * (l[2] * a[2] + l[1] * a[1]), l[0] * a[2] + l[2] * a[1] + a[0] * l[2] + a[2] * l[1], 0.0];
-            let dl = sp.dlog(&sym(b));
+            let dl = dlog(sp, &sym(b));
             let de = [0.5 * dl[0], 0.5 * dl[1], 0.5 * dl[2], 0.5 * dl[3]];
             let dv = dev(&de);
             let nn = d.coef_nn * ddot(&n, &de);
