@@ -650,6 +650,15 @@ impl Simulation {
         }
     }
 
+    /// The forcing of the solves before a friction update (`LAG_FORCING` of solver/barrier.rs by
+    /// default; 0: every solve converged to the solver's tolerance; nothing to set without the
+    /// barrier). For tests and benchmarks that measure what it gains; no case key reaches it.
+    pub fn set_barrier_lag_forcing(&mut self, forcing: f64) {
+        if let Some(b) = self.barrier.as_mut() {
+            b.lag_forcing = forcing;
+        }
+    }
+
     /// Switch the barrier's box prediction of each step off or on (on by default; nothing to
     /// switch without the barrier). For tests and benchmarks that measure what Newton does
     /// from the last converged state; no case key reaches it.

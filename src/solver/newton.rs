@@ -216,9 +216,25 @@ impl Simulation {
         let mut iterations = 0;
         let mut updates = 0;
         let mut first = true;
+        // the out-of-balance force (N/mm) at which this solve stops for a friction update (0:
+        // the solver's tolerance; see [`super::barrier::LAG_FORCING`])
+        let forcing = self.barrier.as_ref().map_or(0.0, |b| b.lag_forcing);
+        let largest = self.barrier.as_ref().filter(|b| b.has_friction()).map_or(0.0, |b| b.largest_friction());
+        let mut loose = forcing * super::barrier::LAG_FIRST_CHANGE * self.sys.max(largest);
         loop {
             let vol = self.volumetric(&lambda);
-            let (its, res) = match self.newton(&mut u, inc, &vol) {
+            if let Some(b) = self.barrier.as_mut() {
+                b.lag_tol = loose;
+            }
+            let result = self.newton(&mut u, inc, &vol);
+            if let Some(b) = self.barrier.as_mut() {
+                // (a solve that reached the solver's tolerance, the friction settled or not)
+                if b.lag_tol == 0.0 {
+                    loose = 0.0;
+                }
+                b.lag_tol = 0.0;
+            }
+            let (its, res) = match result {
                 Ok(v) => v,
                 Err(NewtonFailure::Element(e)) if first && restart => {
                     // the extrapolated guess inverted an element: restart from the last solution
@@ -245,10 +261,19 @@ impl Simulation {
                 }
             }
             let worst = self.sys.max(worst);
-            let contact_update = (self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats))
-                && updates < self.model.contact.max_augmentations)
-                || self.update_barrier_friction(&u, updates)
-                || self.update_barrier_ties(&u, updates);
+            let augment = self.contact.as_ref().is_some_and(|c| c.needs_augmentation(&self.contact_stats)) && updates < self.model.contact.max_augmentations;
+            let friction = !augment && self.update_barrier_friction(&u, updates);
+            let contact_update = augment || friction || self.update_barrier_ties(&u, updates);
+            if !contact_update && loose > 0.0 {
+                // the friction has settled on a solve stopped early: the last solve, from
+                // there, to the solver's tolerance (the friction checked again after it)
+                loose = 0.0;
+                continue;
+            }
+            loose = match self.barrier.as_ref() {
+                Some(b) if friction => forcing * b.lag_change,
+                _ => 0.0,
+            };
             if contact_update {
                 if let Some(c) = self.contact.as_mut() {
                     c.augment();
@@ -378,7 +403,17 @@ impl Simulation {
             let tiny = rel <= 0.01 * self.spec.residual_tol || rnorm <= floor;
             let floor_reached = k >= 1 && rel >= 0.5 * residuals[k - 1];
             if residual_ok && (k == 0 || energy_ok || tiny || floor_reached) && self.walls_arrived() {
+                self.converged_to_tolerance();
                 return Ok((k, rel));
+            }
+            // a solve the lagged friction is to move on from stops well below that move
+            // (and where the friction would not move, the solve goes on to the solver's
+            // tolerance at once, with the tangent it has factored)
+            if self.barrier.as_ref().is_some_and(|b| rnorm <= b.lag_tol) && self.walls_arrived() {
+                if !self.friction_settled(u) {
+                    return Ok((k, rel));
+                }
+                self.converged_to_tolerance();
             }
             // with the barrier, IPC's test on the Newton step as well: a residual within a
             // hundred times its tolerance and a whole Newton update below 1e-6 h. The barrier's
@@ -388,6 +423,7 @@ impl Simulation {
             // (seen on the asphalt octagons of 5.2.1, h ≈ 10 mm)
             if let Some(b) = self.barrier.as_ref() {
                 if k >= 2 && b.alpha >= 1.0 && rel <= 100.0 * self.spec.residual_tol && last_update <= 1e-6 * b.h_min {
+                    self.converged_to_tolerance();
                     return Ok((k, rel));
                 }
             }
@@ -583,6 +619,14 @@ impl Simulation {
             }
         }
         Err(NewtonFailure::NotConverged { iterations: max_iterations, residuals })
+    }
+
+    /// Mark the solve under way as one converged to the solver's tolerance, not stopped
+    /// early for a friction update (`BarrierRun::lag_tol` back to 0).
+    fn converged_to_tolerance(&mut self) {
+        if let Some(b) = self.barrier.as_mut() {
+            b.lag_tol = 0.0;
+        }
     }
 
     /// The out-of-balance force R₀ = F_ext − F_int(u₀) of a transferred state, released in
