@@ -221,6 +221,13 @@ impl Simulation {
         let forcing = self.barrier.as_ref().map_or(0.0, |b| b.lag_forcing);
         let largest = self.barrier.as_ref().filter(|b| b.has_friction()).map_or(0.0, |b| b.largest_friction());
         let mut loose = forcing * super::barrier::LAG_FIRST_CHANGE * self.sys.max(largest);
+        // whether the lagged friction has contracted at every update of this step so far, and
+        // the last update's largest change of μλ (N/mm)
+        let mut settling = true;
+        let mut last_change = f64::INFINITY;
+        if let Some(b) = self.barrier.as_mut() {
+            b.lag_ended = false;
+        }
         loop {
             let vol = self.volumetric(&lambda);
             if let Some(b) = self.barrier.as_mut() {
@@ -270,10 +277,22 @@ impl Simulation {
                 loose = 0.0;
                 continue;
             }
+            // (the early stops rest on the lagging's contraction: after an update that moved
+            // the friction no less than the one before, the rest of the step's solves converge,
+            // so that a cycle of the lagging is told as with converged solves, by its coming
+            // back to the friction of two solves before)
             loose = match self.barrier.as_ref() {
+                Some(_) if friction && !settling => 0.0,
+                Some(b) if friction && b.lag_change >= last_change => {
+                    settling = false;
+                    0.0
+                }
                 Some(b) if friction => forcing * b.lag_change,
                 _ => 0.0,
             };
+            if friction {
+                last_change = self.barrier.as_ref().map_or(0.0, |b| b.lag_change);
+            }
             if contact_update {
                 if let Some(c) = self.contact.as_mut() {
                     c.augment();
