@@ -290,7 +290,6 @@ fn tied_blocks_against_one_block(text: &str, label: &str) {
     assert!(worst < 1e-6, "tied blocks ({label}) differ from one block by {worst}");
 }
 
-
 /// The solves of a frictional step that precede a friction update stop early (at an
 /// out-of-balance force of `LAG_FORCING` times the last change of μλ, src/solver/barrier.rs),
 /// and only the last, with the friction settled, is converged to the solver's tolerance. The
@@ -301,9 +300,9 @@ fn tied_blocks_against_one_block(text: &str, label: &str) {
 /// 1e-4 of the largest (the lagging stops once no μλ moves by more than 1e-4 of the largest,
 /// so two runs that reach the settled friction from different iterates may differ by that
 /// order; measured: 1.3e-7). And the early stops must save Newton iterations over the run
-/// (measured: 130 against 160, the sliding steps 6 each either way). (A regular grid of particles is no case for this comparison: its
-/// symmetric path breaks where round-off decides, docs/robustness.md, thirty-fifth
-/// measurement.)
+/// (measured: 130 against 160, the sliding steps 6 each either way). (A regular grid of
+/// particles is no case for this comparison: its symmetric path breaks where round-off
+/// decides, docs/robustness.md, thirty-fifth and thirty-sixth measurements.)
 #[test]
 fn early_stopped_friction_solves_end_where_converged_ones_do() {
     let text = std::fs::read_to_string("jobs/verification/coulomb_block.toml").unwrap();

@@ -257,12 +257,12 @@ impl BarrierRun {
         BarrierState { kappa: self.contact.kappa, min_distance: self.min_distance, ties: self.contact.ties.clone(), tied: self.contact.tied.clone(), descent: self.descent }
     }
 
-    /// Whether any contact has friction.
     /// The largest μλ of the lagged friction (on this process's pairs).
     pub fn largest_friction(&self) -> f64 {
         self.friction.iter().fold(0.0, |m: f64, f| m.max(f.mu_lambda))
     }
 
+    /// Whether any contact has friction.
     pub fn has_friction(&self) -> bool {
         self.mu > 0.0 || self.mu_walls.iter().any(|&m| m > 0.0)
     }
@@ -598,22 +598,17 @@ impl Simulation {
     /// case 11 four times). Such a cycle is seen as the lagging coming back to where it was two
     /// solves before, to within [`FRICTION_TOL`]: the step keeps its last solve.
     pub(super) fn update_barrier_friction(&mut self, u: &[f64], updates: usize) -> bool {
-        if !self.barrier.as_ref().is_some_and(|b| b.has_friction()) {
+        if !self.barrier.as_ref().is_some_and(|b| b.has_friction() && !b.lag_ended) {
             return false;
         }
-        if self.barrier.as_ref().is_some_and(|b| b.lag_ended) {
-            return false;
-        }
-        let x = self.coords(u);
-        let Some(b) = self.barrier.as_mut() else { return false };
         if updates == 0 {
-            b.friction_before.clear();
+            if let Some(b) = self.barrier.as_mut() {
+                b.friction_before.clear();
+            }
         }
-        let walls = b.walls_at(b.alpha);
-        let new = b.eval.friction_pairs(&b.contact, &x, &walls, b.mu, &b.mu_walls);
-        let before = (!b.friction_before.is_empty()).then_some(&b.friction_before[..]);
-        let changes = lag_changes(before, &b.friction, &new).map(|v| self.sys.max(v));
+        let Some((new, changes)) = self.lag_again(u, true) else { return false };
         let relative = changes[0] / changes[2].max(f64::MIN_POSITIVE);
+        let Some(b) = self.barrier.as_mut() else { return false };
         match lagging(changes, FRICTION_TOL) {
             Lagging::Converged => return false,
             Lagging::Cycle => {
@@ -628,7 +623,6 @@ impl Simulation {
             }
             Lagging::Again => tracing::debug!(change = relative, "lagged friction updated"),
         }
-        let Some(b) = self.barrier.as_mut() else { return false };
         b.lag_change = changes[0];
         b.friction_before = std::mem::replace(&mut b.friction, new);
         true
@@ -638,12 +632,20 @@ impl Simulation {
     /// [`FRICTION_TOL`] of the largest μλ: a solve stopped early for a friction update that
     /// would not come goes on to the solver's tolerance instead ([`LAG_FORCING`]).
     pub(super) fn friction_settled(&mut self, u: &[f64]) -> bool {
+        self.lag_again(u, false).is_none_or(|(_, changes)| matches!(lagging(changes, FRICTION_TOL), Lagging::Converged))
+    }
+
+    /// The friction lagged again at `u` and its changes from the lagged friction
+    /// ([`lag_changes`], each the largest over the processes; from the friction before the last
+    /// update too when `with_before`).
+    fn lag_again(&mut self, u: &[f64], with_before: bool) -> Option<(Vec<FrictionPair>, [f64; 3])> {
         let x = self.coords(u);
-        let Some(b) = self.barrier.as_ref() else { return true };
+        let b = self.barrier.as_ref()?;
         let walls = b.walls_at(b.alpha);
         let new = b.eval.friction_pairs(&b.contact, &x, &walls, b.mu, &b.mu_walls);
-        let changes = lag_changes(None, &b.friction, &new).map(|v| self.sys.max(v));
-        matches!(lagging(changes, FRICTION_TOL), Lagging::Converged)
+        let before = (with_before && !b.friction_before.is_empty()).then_some(&b.friction_before[..]);
+        let changes = lag_changes(before, &b.friction, &new).map(|v| self.sys.max(v));
+        Some((new, changes))
     }
 
     /// After a converged solve with ties: Uzawa's update of their multipliers, λ ← λ + k g;

@@ -281,17 +281,13 @@ impl Simulation {
             // the friction no less than the one before, the rest of the step's solves converge,
             // so that a cycle of the lagging is told as with converged solves, by its coming
             // back to the friction of two solves before)
-            loose = match self.barrier.as_ref() {
-                Some(_) if friction && !settling => 0.0,
-                Some(b) if friction && b.lag_change >= last_change => {
-                    settling = false;
-                    0.0
+            loose = 0.0;
+            if let Some(b) = self.barrier.as_ref().filter(|_| friction) {
+                settling &= b.lag_change < last_change;
+                last_change = b.lag_change;
+                if settling {
+                    loose = forcing * b.lag_change;
                 }
-                Some(b) if friction => forcing * b.lag_change,
-                _ => 0.0,
-            };
-            if friction {
-                last_change = self.barrier.as_ref().map_or(0.0, |b| b.lag_change);
             }
             if contact_update {
                 if let Some(c) = self.contact.as_mut() {
